@@ -1,0 +1,41 @@
+"""Controller families: how a controller becomes arrays the rollout kernel runs.
+
+Contract (every family, GP and BSR alike)
+-----------------------------------------
+A family provides a *kernel module*: a Python source file with two njit
+functions, imported by the generated rollout kernel (gpmotion.sim.rollout):
+
+    init(ci, cf, cstate)                       # once per episode
+    control(ci, cf, senses, senses_norm, t, cstate, targets, taus)   # every step
+
+* ``ci``  int64[:]    this episode's integer program (opcodes, rule counts, ...)
+* ``cf``  float64[:]  this episode's float program (constants, rule tables, ...)
+* ``cstate`` float64[:] per-episode scratch the family owns (active rule, stack...)
+* ``senses`` float64[:] raw senses (names: Figure.sense_names)
+* ``senses_norm`` float64[:] the same, mapped to [0, 1] (BSR's Table 1 view)
+* ``t`` float, seconds since the episode started
+* ``targets`` float64[n_act] out: desired joint angles (clamped later to limits)
+* ``taus``   float64[n_act] out: time constants for ``kinematic`` actuation
+  (pre-filled with the rollout's default τ; a family may overwrite them)
+
+Batches are rectangular: ``ci[n_episodes, Li]``, ``cf[n_episodes, Lf]``
+(zero-padded), plus ``cstate_size``.  Python-side, a family's ``encode``
+turns plain-data genomes into a :class:`ControllerBatch`.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class ControllerBatch(NamedTuple):
+    """Arrays for one batched rollout; ``module`` is the kernel module file."""
+    module: str            # absolute path of the kernel module source file
+    ci: np.ndarray         # int64[n_episodes, Li]
+    cf: np.ndarray         # float64[n_episodes, Lf]
+    cstate_size: int
+
+    @property
+    def n_episodes(self) -> int:
+        return self.ci.shape[0]
