@@ -14,7 +14,9 @@ functions, imported by the generated rollout kernel (gpmotion.sim.rollout):
 * ``senses`` float64[:] raw senses (names: Figure.sense_names)
 * ``senses_norm`` float64[:] the same, mapped to [0, 1] (BSR's Table 1 view)
 * ``t`` float, seconds since the episode started
-* ``targets`` float64[n_act] out: desired joint angles (clamped later to limits)
+* ``targets`` float64[n_act] out: desired joint angles (clamped later to limits);
+  pre-filled every step with the figure's neutral pose, so a family that
+  controls only some actuators leaves the others holding neutral
 * ``taus``   float64[n_act] out: time constants for ``kinematic`` actuation
   (pre-filled with the rollout's default τ; a family may overwrite them)
 
