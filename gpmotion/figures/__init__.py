@@ -1,0 +1,45 @@
+"""Figure registry: shipped TOML specs by name, user specs by path or dict."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..model import Figure
+from .spec import SpecError, compile_spec, load_spec
+
+_HERE = Path(__file__).parent
+_REGISTRY: dict[str, Path | dict] = {p.stem: p for p in sorted(_HERE.glob("*.toml"))}
+_CACHE: dict[str, Figure] = {}
+
+
+def register_figure(name: str, spec: dict | str | Path) -> None:
+    """Register a figure spec (dict or TOML path) under ``name``."""
+    if name in _REGISTRY:
+        raise ValueError(f"figure {name!r} is already registered ({_REGISTRY[name]})")
+    _REGISTRY[name] = spec if isinstance(spec, dict) else Path(spec)
+
+
+def figure_names() -> list[str]:
+    return sorted(_REGISTRY)
+
+
+def load_figure(name_or_spec) -> Figure:
+    """A compiled Figure from a registered name, a TOML path, or a spec dict."""
+    if isinstance(name_or_spec, Figure):
+        return name_or_spec
+    if isinstance(name_or_spec, dict):
+        return compile_spec(name_or_spec)
+    key = str(name_or_spec)
+    if key in _CACHE:
+        return _CACHE[key]
+    if key in _REGISTRY:
+        src = _REGISTRY[key]
+        fig = compile_spec(src if isinstance(src, dict) else load_spec(src))
+    elif key.endswith(".toml") or Path(key).exists():
+        fig = compile_spec(load_spec(key))
+    else:
+        raise SpecError(f"unknown figure {key!r}; known: {', '.join(figure_names())}")
+    _CACHE[key] = fig
+    return fig
+
+
+__all__ = ["SpecError", "compile_spec", "load_spec", "load_figure", "register_figure", "figure_names"]

@@ -1,0 +1,309 @@
+"""BSR genomes: plain data, random initialization (Table 2), batch encoding.
+
+Genomes are small dataclasses of numpy arrays, so they pickle, cross
+processes and serialize to versioned JSON (``to_dict`` / ``genome_from_dict``)
+with validation: untrusted files get one clear ``ValueError``.  Each genome
+carries the ranges it was drawn in (joint limits, τ range, t_per) so mutation
+needs nothing but the genome, an rng and (for the relevance heuristic) the
+sense trajectory.
+
+Table 2 initial distributions (Auslander et al.):
+  τ      log-uniform in [2Δt, T/4]
+  θ₀     uniform in [θ_min, θ_max] per joint
+  μ      uniform in [−0.5, 1.5]
+  2/λ    log-uniform in [0.4, 4]   ⇒ λ ∈ [0.5, 5], λ_min = 0.5
+Validity ranges are Table 2's except μ, which may lie in [−2, 3]: the
+relevance heuristic puts a box corner on a sense point in [0, 1] and the box
+half-side is at most 2, so its centre can reach −2 or 3.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gpmotion.controllers import ControllerBatch
+
+LAMBDA_MIN = 2.0 / 4.0          # smallest allowable λ (largest side 4)
+LAMBDA_MAX = 2.0 / 0.4          # largest λ (smallest side 0.4)
+MU_INIT = (-0.5, 1.5)
+MU_BOUNDS = (-2.0, 3.0)
+MAX_RULES = 10_000              # caps for untrusted files
+MAX_WIDTH = 10_000
+SENSE_FORMAT = "bsr-sense-v1"
+TIME_FORMAT = "bsr-time-v1"
+
+_KERNELS = Path(__file__).resolve().parent
+SENSE_KERNEL = str(_KERNELS / "sense_kernel.py")
+TIME_KERNEL = str(_KERNELS / "time_kernel.py")
+
+
+def tau_bounds(dt: float, T: float) -> tuple[float, float]:
+    """Table 2's τ range [2Δt, T/4]; ValueError if empty."""
+    lo, hi = 2.0 * float(dt), float(T) / 4.0
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
+        raise ValueError(f"tau range [2*dt, T/4] = [{lo}, {hi}] is empty or "
+                         f"invalid (dt={dt}, T={T})")
+    return lo, hi
+
+
+def log_uniform(rng: np.random.Generator, lo: float, hi: float, size=None):
+    """Log-uniform samples in [lo, hi] (clipped against rounding)."""
+    x = np.exp(rng.uniform(np.log(lo), np.log(hi), size))
+    return np.clip(x, lo, hi)
+
+
+def _array(name, value, ndim):
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: not an array of numbers ({exc})") from None
+    if a.ndim != ndim:
+        raise ValueError(f"{name}: expected {ndim}-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains non-finite values")
+    if a.size > MAX_RULES * MAX_WIDTH:
+        raise ValueError(f"{name}: too large ({a.size} values)")
+    return a if a.ndim == 0 else np.ascontiguousarray(a)
+
+
+def _in_range(name, a, lo, hi):
+    if np.any(a < lo) or np.any(a > hi):
+        raise ValueError(f"{name}: values outside [{lo}, {hi}] "
+                         f"(min {a.min()}, max {a.max()})")
+
+
+def _check_response(theta0, tau, limits, tau_range):
+    """Shared checks of the response part (θ₀, τ) and its ranges."""
+    n_rules, n_act = theta0.shape
+    if not 1 <= n_rules <= MAX_RULES:
+        raise ValueError(f"n_rules must be in [1, {MAX_RULES}], got {n_rules}")
+    if n_act < 1:
+        raise ValueError("theta0: needs at least one joint column")
+    if tau.shape != (n_rules,):
+        raise ValueError(f"tau: expected shape ({n_rules},), got {tau.shape}")
+    if limits.shape != (n_act, 2):
+        raise ValueError(f"limits: expected shape ({n_act}, 2), got {limits.shape}")
+    if np.any(limits[:, 0] > limits[:, 1]):
+        raise ValueError("limits: a lower joint limit exceeds its upper limit")
+    if tau_range.shape != (2,) or not 0.0 < tau_range[0] <= tau_range[1]:
+        raise ValueError(f"tau_range: expected [lo, hi] with 0 < lo <= hi, "
+                         f"got {tau_range.tolist()}")
+    bad = (theta0 < limits[:, 0]) | (theta0 > limits[:, 1])
+    if np.any(bad):
+        r, j = np.argwhere(bad)[0]
+        raise ValueError(f"theta0[{r}, {j}] = {theta0[r, j]} outside joint "
+                         f"limits {limits[j].tolist()}")
+    _in_range("tau", tau, tau_range[0], tau_range[1])
+
+
+def _expect_dict(d, fmt, keys):
+    if not isinstance(d, dict):
+        raise ValueError(f"genome must be a JSON object, got {type(d).__name__}")
+    if d.get("format") != fmt:
+        raise ValueError(f"genome format must be {fmt!r}, got {d.get('format')!r}")
+    missing = [k for k in keys if k not in d]
+    if missing:
+        raise ValueError(f"genome ({fmt}) is missing field(s): {', '.join(missing)}")
+
+
+@dataclass(eq=False)
+class SenseGenome:
+    """Sense-based controller: rule j = (μ[j], λ[j]) → (θ₀[j], τ[j])."""
+    mu: np.ndarray          # float64[R, V]  hyperrectangle centres
+    lam: np.ndarray         # float64[R, V]  λ = 2 / side length
+    theta0: np.ndarray      # float64[R, n_act] target poses
+    tau: np.ndarray         # float64[R]     one time constant per rule
+    limits: np.ndarray      # float64[n_act, 2] joint limits θ₀ is drawn in
+    tau_range: np.ndarray   # float64[2]     [2Δt, T/4]
+
+    kind = "sense"
+
+    def __post_init__(self):
+        self.mu = _array("mu", self.mu, 2)
+        self.lam = _array("lam", self.lam, 2)
+        self.theta0 = _array("theta0", self.theta0, 2)
+        self.tau = _array("tau", self.tau, 1)
+        self.limits = _array("limits", self.limits, 2)
+        self.tau_range = _array("tau_range", self.tau_range, 1)
+        _check_response(self.theta0, self.tau, self.limits, self.tau_range)
+        shape = (self.theta0.shape[0], self.mu.shape[1])
+        if self.mu.shape != shape or self.lam.shape != shape or shape[1] < 1:
+            raise ValueError(f"mu and lam must both have shape (n_rules, V) = "
+                             f"{shape} with V >= 1, got {self.mu.shape} and "
+                             f"{self.lam.shape}")
+        _in_range("mu", self.mu, *MU_BOUNDS)
+        _in_range("lam", self.lam, LAMBDA_MIN, LAMBDA_MAX)
+
+    n_rules = property(lambda self: self.theta0.shape[0])
+    n_senses = property(lambda self: self.mu.shape[1])
+    n_act = property(lambda self: self.theta0.shape[1])
+
+    @property
+    def n_parameters(self) -> int:
+        """(2V + n_act + 1)R; with V = 2N+2, n_act = N−1 this is (5N+4)R."""
+        return self.mu.size + self.lam.size + self.theta0.size + self.tau.size
+
+    def weights(self) -> np.ndarray:
+        """W_j = Σ_k log(λ_jk / λ_min): specific (small) boxes score higher."""
+        return np.log(self.lam / LAMBDA_MIN).sum(axis=1)
+
+    def copy(self) -> "SenseGenome":
+        return SenseGenome(self.mu.copy(), self.lam.copy(), self.theta0.copy(),
+                           self.tau.copy(), self.limits.copy(), self.tau_range.copy())
+
+    def to_dict(self) -> dict:
+        return {"format": SENSE_FORMAT, "mu": self.mu.tolist(),
+                "lam": self.lam.tolist(), "theta0": self.theta0.tolist(),
+                "tau": self.tau.tolist(), "limits": self.limits.tolist(),
+                "tau_range": self.tau_range.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SenseGenome":
+        keys = ("mu", "lam", "theta0", "tau", "limits", "tau_range")
+        _expect_dict(d, SENSE_FORMAT, keys)
+        return cls(*(d[k] for k in keys))
+
+
+@dataclass(eq=False)
+class TimeGenome:
+    """Time-based controller: segment r of period t_per → (θ₀[r], τ[r])."""
+    theta0: np.ndarray      # float64[R, n_act]
+    tau: np.ndarray         # float64[R]
+    t_per: float            # period, seconds (set by the user, not evolved)
+    limits: np.ndarray      # float64[n_act, 2]
+    tau_range: np.ndarray   # float64[2]
+
+    kind = "time"
+
+    def __post_init__(self):
+        self.theta0 = _array("theta0", self.theta0, 2)
+        self.tau = _array("tau", self.tau, 1)
+        self.limits = _array("limits", self.limits, 2)
+        self.tau_range = _array("tau_range", self.tau_range, 1)
+        _check_response(self.theta0, self.tau, self.limits, self.tau_range)
+        t_per = _array("t_per", self.t_per, 0)
+        if not t_per > 0.0:
+            raise ValueError(f"t_per must be > 0, got {float(t_per)}")
+        self.t_per = float(t_per)
+
+    n_rules = property(lambda self: self.theta0.shape[0])
+    n_act = property(lambda self: self.theta0.shape[1])
+
+    @property
+    def n_parameters(self) -> int:
+        """(n_act + 1)R: θ₀ per joint and one τ per segment."""
+        return self.theta0.size + self.tau.size
+
+    def copy(self) -> "TimeGenome":
+        return TimeGenome(self.theta0.copy(), self.tau.copy(), self.t_per,
+                          self.limits.copy(), self.tau_range.copy())
+
+    def to_dict(self) -> dict:
+        return {"format": TIME_FORMAT, "theta0": self.theta0.tolist(),
+                "tau": self.tau.tolist(), "t_per": self.t_per,
+                "limits": self.limits.tolist(), "tau_range": self.tau_range.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TimeGenome":
+        keys = ("theta0", "tau", "t_per", "limits", "tau_range")
+        _expect_dict(d, TIME_FORMAT, keys)
+        return cls(*(d[k] for k in keys))
+
+
+def genome_from_dict(d: dict) -> SenseGenome | TimeGenome:
+    """Parse either genome kind by its ``format`` field."""
+    fmt = d.get("format") if isinstance(d, dict) else None
+    if fmt == SENSE_FORMAT:
+        return SenseGenome.from_dict(d)
+    if fmt == TIME_FORMAT:
+        return TimeGenome.from_dict(d)
+    raise ValueError(f"unknown genome format {fmt!r}; expected "
+                     f"{SENSE_FORMAT!r} or {TIME_FORMAT!r}")
+
+
+def random_theta0(rng, limits, n_rules):
+    limits = np.asarray(limits, dtype=np.float64)
+    return rng.uniform(limits[:, 0], limits[:, 1], (n_rules, limits.shape[0]))
+
+
+def random_stimulus(rng, n_rules, n_senses):
+    """Table 2 μ and λ for n_rules fresh rules."""
+    mu = rng.uniform(MU_INIT[0], MU_INIT[1], (n_rules, n_senses))
+    lam = np.clip(2.0 / log_uniform(rng, 0.4, 4.0, (n_rules, n_senses)),
+                  LAMBDA_MIN, LAMBDA_MAX)
+    return mu, lam
+
+
+def random_sense_genome(rng: np.random.Generator, n_rules: int, n_senses: int,
+                        limits, dt: float, T: float) -> SenseGenome:
+    """A random sense-based controller drawn from Table 2."""
+    lo, hi = tau_bounds(dt, T)
+    limits = np.asarray(limits, dtype=np.float64)
+    mu, lam = random_stimulus(rng, n_rules, n_senses)
+    theta0 = random_theta0(rng, limits, n_rules)
+    tau = log_uniform(rng, lo, hi, n_rules)
+    return SenseGenome(mu, lam, theta0, tau, limits, np.array([lo, hi]))
+
+
+def random_time_genome(rng: np.random.Generator, n_rules: int, limits,
+                       dt: float, T: float, t_per: float) -> TimeGenome:
+    """A random time-based controller (responses from Table 2)."""
+    lo, hi = tau_bounds(dt, T)
+    limits = np.asarray(limits, dtype=np.float64)
+    theta0 = random_theta0(rng, limits, n_rules)
+    tau = log_uniform(rng, lo, hi, n_rules)
+    return TimeGenome(theta0, tau, t_per, limits, np.array([lo, hi]))
+
+
+def encode_batch(genomes, sense_indices=None, n_act: int | None = None
+                 ) -> ControllerBatch:
+    """Program arrays for one batched rollout (layouts: the kernel modules).
+
+    ``sense_indices`` (int[V]) says which entries of ``senses_norm`` a
+    sense-based genome's V stimulus columns read; it is ignored for
+    time-based genomes.  ``n_act`` (the figure's actuator count) must equal
+    every genome's θ₀ width.
+    """
+    genomes = list(genomes)
+    if not genomes:
+        raise ValueError("encode_batch: no genomes")
+    kinds = {g.kind for g in genomes}
+    if len(kinds) != 1:
+        raise ValueError(f"encode_batch: mixed genome kinds {sorted(kinds)}")
+    widths = {g.n_act for g in genomes}
+    if len(widths) != 1 or (n_act is not None and widths != {n_act}):
+        raise ValueError(f"encode_batch: genome joint counts {sorted(widths)} "
+                         f"do not match n_act={n_act}")
+    n_act = widths.pop()
+    rows_i, rows_f = [], []
+    if kinds == {"sense"}:
+        from gpmotion.bsr.sense_kernel import CSTATE_SIZE
+        if sense_indices is None:
+            raise ValueError("encode_batch: sense-based genomes need sense_indices")
+        idx = np.asarray(sense_indices, dtype=np.int64).ravel()
+        if np.any(idx < 0):
+            raise ValueError("encode_batch: sense-based genomes need "
+                             "non-negative sense_indices")
+        for g in genomes:
+            if g.n_senses != idx.size:
+                raise ValueError(f"encode_batch: genome reads {g.n_senses} "
+                                 f"senses but {idx.size} sense_indices given")
+            rows_i.append(np.concatenate([[g.n_rules, idx.size, n_act], idx]))
+            rows_f.append(np.hstack([g.weights()[:, None], g.tau[:, None],
+                                     g.mu, g.lam, g.theta0]).ravel())
+        module, cstate_size = SENSE_KERNEL, CSTATE_SIZE
+    else:
+        from gpmotion.bsr.time_kernel import CSTATE_SIZE
+        for g in genomes:
+            rows_i.append(np.array([g.n_rules, n_act]))
+            rows_f.append(np.concatenate(
+                [[g.t_per], np.hstack([g.tau[:, None], g.theta0]).ravel()]))
+        module, cstate_size = TIME_KERNEL, CSTATE_SIZE
+    ci = np.zeros((len(genomes), max(r.size for r in rows_i)), dtype=np.int64)
+    cf = np.zeros((len(genomes), max(r.size for r in rows_f)), dtype=np.float64)
+    for e, (ri, rf) in enumerate(zip(rows_i, rows_f)):
+        ci[e, :ri.size] = ri
+        cf[e, :rf.size] = rf
+    return ControllerBatch(module=module, ci=ci, cf=cf, cstate_size=cstate_size)

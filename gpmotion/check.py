@@ -1,0 +1,109 @@
+"""Public checks for plugins (as Gymnasium's ``check_env``): the contract tests
+run exactly these, so a user's plugin is held to the same standard.
+
+``check_primitive`` compiles the *copy* of the primitive that the generated
+interpreter uses (not the original function), so it also catches primitives
+that rely on module globals the copy cannot see.
+"""
+from __future__ import annotations
+
+import inspect
+import itertools
+import math
+import numbers
+
+import numpy as np
+
+from gpmotion.cache import digest, import_file, write_module
+from gpmotion.gp import primitives as registry
+
+# Edge inputs: zero, tiny, unit, the clamp and far beyond it (huge/huge, x/0 ...).
+EDGE_VALUES = (0.0, 1e-12, -1e-12, 1.0, -1.0, 1e6, -1e6, 1e300, -1e300)
+
+
+def _resolve(p) -> registry.Primitive:
+    if isinstance(p, registry.Primitive):
+        return p
+    if isinstance(p, str):
+        registry.load_builtin()
+        return registry.get(p)
+    prim = getattr(p, "__gpmotion_primitive__", None)
+    if prim is None:
+        raise TypeError(f"not a primitive: {p!r} (give a name, a Primitive or a "
+                        "function decorated with @primitive)")
+    return prim
+
+
+def _saturate(v: float) -> float:
+    """The interpreter's clamp without its NaN safety net: NaN stays NaN."""
+    return min(max(float(v), -registry.CLAMP), registry.CLAMP) if v == v else math.nan
+
+
+def _agree(a: float, b: float) -> bool:
+    if a != a or b != b:
+        return a != a and b != b
+    return a == b or math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-300)
+
+
+def njit_copy(prim: registry.Primitive):
+    """The njit-compiled copy of ``prim`` exactly as the interpreter embeds it."""
+    from gpmotion.gp.interpreter import primitive_module_source
+    src = primitive_module_source([prim])
+    module = import_file(write_module(f"prim_{digest(src)}", src))
+    return getattr(module, prim.copy_name)
+
+
+def check_primitive(name_or_prim, *, n_random: int = 300, seed: int = 0) -> None:
+    """Raise AssertionError (clear message) unless the primitive is fit for the interpreter.
+
+    Checks: declared arity matches the signature; its copy compiles in numba;
+    njit and Python agree on random inputs and on every combination of
+    EDGE_VALUES; results are never NaN (infinities are fine: the interpreter
+    saturates them to +-1e6).
+    """
+    p = _resolve(name_or_prim)
+    where = f"primitive {p.name!r} ({p.file})"
+    params = list(inspect.signature(p.func).parameters.values())
+    plain = all(q.kind in (q.POSITIONAL_ONLY, q.POSITIONAL_OR_KEYWORD)
+                and q.default is q.empty for q in params)
+    if not plain or len(params) != p.arity:
+        raise AssertionError(f"{where}: declared arity {p.arity} but signature is "
+                             f"{inspect.signature(p.func)} (need {p.arity} plain arguments)")
+    try:
+        fast = njit_copy(p)
+        fast(*([0.5] * p.arity))
+    except Exception as exc:          # numba TypingError etc.
+        first = str(exc).strip().splitlines()[:6]
+        raise AssertionError(f"{where}: does not compile in numba "
+                             "(only builtins, math/numpy and names the plugin file imports "
+                             "are visible to the copy):\n  " + "\n  ".join(first)) from exc
+
+    rng = np.random.default_rng(seed)
+    scales = np.array([1.0, 1e-3, 1e3, 1e6])
+    randoms = (rng.uniform(-1, 1, (n_random, p.arity))
+               * scales[rng.integers(0, len(scales), (n_random, p.arity))])
+    cases = itertools.chain(map(tuple, randoms.tolist()),
+                            itertools.product(EDGE_VALUES, repeat=p.arity))
+    for args in cases:
+        try:
+            slow = p.func(*args)
+        except Exception as exc:
+            raise AssertionError(f"{where}: Python form raised {exc!r} on {args}") from exc
+        if not isinstance(slow, numbers.Real):
+            raise AssertionError(f"{where}: returned {slow!r} (not a number) on {args}")
+        got = fast(*args)
+        if not isinstance(got, (float, np.floating)):
+            raise AssertionError(f"{where}: njit returned {type(got).__name__}, not float, on {args}")
+        a, b = _saturate(slow), _saturate(got)
+        if a != a or b != b:
+            raise AssertionError(f"{where}: NaN on inputs {args} (Python {slow!r}, njit {got!r}); "
+                                 "handle that case explicitly")
+        if not _agree(a, b):
+            raise AssertionError(f"{where}: njit {got!r} != Python {slow!r} on {args}")
+    return None
+
+
+# --------------------------------------------------------------------------
+# check_task: to be added by the lead (task contract: builds, rolls out,
+# scores finite, deterministic for a seed).  Intentionally not implemented here.
+# --------------------------------------------------------------------------

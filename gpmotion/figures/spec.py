@@ -1,0 +1,268 @@
+"""Figure specs (TOML files or dicts) → validated, compiled :class:`Figure`.
+
+A spec names bodies, the joints between them, contact points and sites.
+Body frames: a body's origin is the joint that attaches it to its parent
+(the root body's origin is its placement); geometry (``segment``, ``com``)
+is given in that frame, x along the body, z across it.  Inertia is either
+given or derived from ``shape`` ("rod": thin rod along the segment, "box":
+segment length × 2·radius) about the centre of mass.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+
+from ..model import ACTUATED, REVOLUTE, SLIDE_X, SLIDE_Z, Figure, Model
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+
+class SpecError(ValueError):
+    """A figure spec is malformed or impossible; the message names the field."""
+
+
+PLANAR_AXIS = (0.0, -1.0, 0.0)   # CCW in the x–z plane seen with x right, z up
+
+
+def load_spec(path: str | Path) -> dict:
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise SpecError(f"{path}: no such figure file") from None
+    except tomllib.TOMLDecodeError as e:
+        raise SpecError(f"{path}: not valid TOML ({e})") from None
+
+
+def _num(d, key, where, default=None, lo=None, positive=False):
+    v = d.get(key, default)
+    if v is None:
+        raise SpecError(f"{where}: missing '{key}'")
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise SpecError(f"{where}: '{key}' must be a finite number, got {v!r}")
+    if positive and v <= 0:
+        raise SpecError(f"{where}: '{key}' must be > 0, got {v!r}")
+    if lo is not None and v < lo:
+        raise SpecError(f"{where}: '{key}' must be >= {lo}, got {v!r}")
+    return float(v)
+
+
+def _vec(d, key, where, n, default=None):
+    v = d.get(key, default)
+    if v is None:
+        raise SpecError(f"{where}: missing '{key}'")
+    if (not isinstance(v, (list, tuple)) or len(v) != n or
+            not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                    and math.isfinite(x) for x in v)):
+        raise SpecError(f"{where}: '{key}' must be a list of {n} finite numbers, got {v!r}")
+    return np.array(v, dtype=np.float64)
+
+
+def _body(b, i):
+    where = f"body {b.get('name', i)!r}"
+    if not isinstance(b.get("name"), str) or not b["name"]:
+        raise SpecError(f"body #{i}: needs a 'name'")
+    mass = _num(b, "mass", where, positive=True)
+    seg = b.get("segment")
+    if (not isinstance(seg, list) or len(seg) != 2):
+        raise SpecError(f"{where}: 'segment' must be [[x0, z0], [x1, z1]]")
+    a = _vec({"a": seg[0]}, "a", where + " segment", 2)
+    bb = _vec({"b": seg[1]}, "b", where + " segment", 2)
+    radius = _num(b, "radius", where, default=0.02, positive=True)
+    length = float(np.hypot(*(bb - a)))
+    com = _vec(b, "com", where, 2, default=list((a + bb) / 2))
+    shape = b.get("shape", "rod")
+    if "inertia" in b:
+        inertia = _num(b, "inertia", where, positive=True)
+    elif shape == "rod":
+        inertia = mass * length ** 2 / 12.0
+    elif shape == "box":
+        inertia = mass * (length ** 2 + (2 * radius) ** 2) / 12.0
+    else:
+        raise SpecError(f"{where}: unknown shape {shape!r} (rod, box)")
+    inertia = max(inertia, mass * radius ** 2 / 2.0)  # a capsule is never thinner than its radius
+    return dict(name=b["name"], mass=mass, com=com, inertia=inertia,
+                seg=(a, bb), radius=radius)
+
+
+def _joint(j, bodies, i):
+    where = f"joint {j.get('name', i)!r}"
+    for k in ("name", "parent", "child"):
+        if not isinstance(j.get(k), str):
+            raise SpecError(f"{where}: needs '{k}' (a name)")
+    for k in ("parent", "child"):
+        if j[k] not in bodies:
+            raise SpecError(f"{where}: unknown {k} body {j[k]!r}")
+    if j.get("type", "hinge") != "hinge":
+        raise SpecError(f"{where}: unknown joint type {j.get('type')!r} (the planar kernel has 'hinge')")
+    axis = tuple(_vec(j, "axis", where, 3, default=list(PLANAR_AXIS)))
+    if axis != PLANAR_AXIS:
+        raise SpecError(f"{where}: planar figures need axis {list(PLANAR_AXIS)} (x–z plane, CCW), got {list(axis)}")
+    lim = _vec(j, "limits", where, 2, default=[-math.pi, math.pi])
+    if not lim[0] < lim[1]:
+        raise SpecError(f"{where}: limits must be [lo, hi] with lo < hi, got {list(lim)}")
+    neutral = _num(j, "neutral", where, default=0.0)
+    if not lim[0] <= neutral <= lim[1]:
+        raise SpecError(f"{where}: neutral {neutral} lies outside limits {list(lim)}")
+    actuated = j.get("actuated", True)
+    if not isinstance(actuated, bool):
+        raise SpecError(f"{where}: 'actuated' must be true or false")
+    return dict(name=j["name"], parent=j["parent"], child=j["child"],
+                offset=_vec(j, "offset", where, 2, default=[0.0, 0.0]),
+                angle=_num(j, "angle", where, default=0.0), lo=lim[0], hi=lim[1],
+                neutral=neutral, initial=_num(j, "initial", where, default=neutral),
+                actuated=actuated, kp=_num(j, "kp", where, default=0.0, lo=0.0),
+                kd=_num(j, "kd", where, default=0.0, lo=0.0),
+                tau_max=_num(j, "torque_limit", where, default=0.0, lo=0.0),
+                damping=_num(j, "damping", where, default=0.0, lo=0.0))
+
+
+def _points(items, kind, bodies):
+    out = []
+    for i, p in enumerate(items):
+        where = f"{kind} {p.get('name', i)!r}"
+        if not isinstance(p.get("name"), str) or p.get("body") not in bodies:
+            raise SpecError(f"{where}: needs a 'name' and a known 'body'")
+        out.append((p["name"], p["body"], _vec(p, "position", where, 2)))
+    names = [p[0] for p in out]
+    if len(set(names)) != len(names):
+        raise SpecError(f"{kind} names must be unique: {names}")
+    return out
+
+
+def _tree_order(spec_bodies, joints, root_body):
+    g = nx.DiGraph()
+    g.add_nodes_from(spec_bodies)
+    for j in joints:
+        if g.has_edge(j["parent"], j["child"]) or g.in_degree(j["child"]) > 0:
+            raise SpecError(f"joint {j['name']!r}: body {j['child']!r} already has a parent")
+        g.add_edge(j["parent"], j["child"], joint=j)
+    if root_body not in g:
+        raise SpecError(f"root: unknown body {root_body!r}")
+    if not nx.is_arborescence(g) or g.in_degree(root_body) != 0:
+        loose = set(g) - {root_body} - set(nx.descendants(g, root_body))
+        raise SpecError("joints must form a tree rooted at the root body"
+                        + (f"; not reached from it: {sorted(loose)}" if loose else "; a cycle exists"))
+    return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
+
+
+def compile_spec(spec: dict, sense_ranges=None) -> Figure:
+    """Validate a spec dict and compile it into a Figure (arrays parents-first)."""
+    from ..sim.senses import sense_layout
+    if not isinstance(spec, dict):
+        raise SpecError("a figure spec must be a table/dict")
+    name = spec.get("name")
+    if not isinstance(name, str) or not name:
+        raise SpecError("figure: needs a 'name'")
+    raw_bodies = spec.get("bodies")
+    if not isinstance(raw_bodies, list) or not raw_bodies:
+        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
+    bodies = {}
+    for i, b in enumerate(raw_bodies):
+        if not isinstance(b, dict):
+            raise SpecError(f"body #{i}: must be a table")
+        bd = _body(b, i)
+        if bd["name"] in bodies:
+            raise SpecError(f"body {bd['name']!r} is defined twice")
+        bodies[bd["name"]] = bd
+    root = spec.get("root", {})
+    rtype = root.get("type", "planar")
+    if rtype not in ("planar", "fixed"):
+        raise SpecError(f"root: unknown type {rtype!r} (planar, fixed)")
+    root_body = root.get("body", raw_bodies[0].get("name"))
+    joints = [_joint(j, bodies, i) for i, j in enumerate(spec.get("joints", []))]
+    if len({j["name"] for j in joints}) != len(joints):
+        raise SpecError("joint names must be unique")
+    ordered = _tree_order(list(bodies), joints, root_body)
+    pos = _vec(root, "position", "root", 2, default=[0.0, 0.0])
+    ang = _num(root, "angle", "root", default=0.0)
+
+    links = []  # dicts: parent, jtype, xtree, body, joint
+    body_link = {}
+    if rtype == "planar":
+        links.append(dict(name="root_x", parent=-1, jtype=SLIDE_X, xtree=(0, 0, 0), body=None, q0=pos[0]))
+        links.append(dict(name="root_z", parent=0, jtype=SLIDE_Z, xtree=(0, 0, 0), body=None, q0=pos[1]))
+        links.append(dict(name="root_pitch", parent=1, jtype=REVOLUTE, xtree=(0, 0, 0), body=root_body, q0=ang))
+        body_link[root_body] = 2
+    else:
+        body_link[root_body] = -1
+    c, s = math.cos(ang), math.sin(ang)
+    for j in ordered:
+        p = body_link[j["parent"]]
+        off, a = j["offset"], j["angle"]
+        if p == -1:  # hangs from a fixed root: fold the placement into xtree
+            off = pos + np.array([c * off[0] - s * off[1], s * off[0] + c * off[1]])
+            a = a + ang
+        body_link[j["child"]] = len(links)
+        links.append(dict(name=j["name"], parent=p, jtype=REVOLUTE, xtree=(a, off[0], off[1]),
+                          body=j["child"], joint=j, q0=j["initial"]))
+    nl = len(links)
+    if nl == 0:
+        raise SpecError(f"figure {name!r}: nothing moves (fixed root and no joints)")
+
+    def body_arr(key, shape):
+        out = np.zeros((nl,) + shape)
+        for i, L in enumerate(links):
+            if L["body"] is not None:
+                out[i] = bodies[L["body"]][key]
+        return out
+
+    lo = np.full(nl, -np.inf)
+    hi = np.full(nl, np.inf)
+    damping = np.zeros(nl)
+    act = [(i, L["joint"]) for i, L in enumerate(links) if "joint" in L and L["joint"]["actuated"]]
+    for i, L in enumerate(links):
+        if "joint" in L:
+            lo[i], hi[i], damping[i] = L["joint"]["lo"], L["joint"]["hi"], L["joint"]["damping"]
+    for i, j in act:
+        if j["kp"] <= 0 or j["tau_max"] <= 0:
+            raise SpecError(f"joint {j['name']!r}: an actuated joint needs kp > 0 and torque_limit > 0")
+    contacts = _points(spec.get("contacts", []), "contact", bodies)
+    sites = _points(spec.get("sites", []), "site", bodies)
+    seg_bodies = list(bodies)
+    total_mass = sum(b["mass"] for b in bodies.values() if body_link[b["name"]] >= 0)
+    actuator_names = [j["name"] for _, j in act]
+    contact_names = [c_[0] for c_ in contacts]
+    sense_names, sense_lo, sense_hi = sense_layout(
+        actuator_names, contact_names, np.array([j["lo"] for _, j in act]),
+        np.array([j["hi"] for _, j in act]), total_mass, sense_ranges or {})
+    limits = spec.get("limits", {})
+    model = Model(
+        parent=np.array([L["parent"] for L in links], dtype=np.int64),
+        jtype=np.array([L["jtype"] for L in links], dtype=np.int64),
+        xtree=np.array([L["xtree"] for L in links], dtype=np.float64),
+        mass=body_arr("mass", ()), com=body_arr("com", (2,)), icom=body_arr("inertia", ()),
+        lo=lo, hi=hi, damping=damping,
+        act_dof=np.array([i for i, _ in act], dtype=np.int64),
+        kp=np.array([j["kp"] for _, j in act], dtype=np.float64),
+        kd=np.array([j["kd"] for _, j in act], dtype=np.float64),
+        tau_max=np.array([j["tau_max"] for _, j in act], dtype=np.float64),
+        neutral=np.array([j["neutral"] for _, j in act], dtype=np.float64),
+        cp_link=np.array([body_link[c_[1]] for c_ in contacts], dtype=np.int64),
+        cp_pos=np.array([c_[2] for c_ in contacts], dtype=np.float64).reshape(-1, 2),
+        seg_link=np.array([body_link[b] for b in seg_bodies], dtype=np.int64),
+        seg_a=np.array([bodies[b]["seg"][0] for b in seg_bodies]),
+        seg_b=np.array([bodies[b]["seg"][1] for b in seg_bodies]),
+        seg_r=np.array([bodies[b]["radius"] for b in seg_bodies]),
+        fixed_pose=np.array([ang, pos[0], pos[1]]),
+        base_link=body_link[root_body],
+        limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
+        limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0),
+        sense_lo=sense_lo, sense_hi=sense_hi,
+    )
+    return Figure(
+        name=name, model=model, root=rtype, link_names=[L["name"] for L in links],
+        actuator_names=actuator_names, contact_names=contact_names,
+        site_names=[s_[0] for s_ in sites],
+        site_link=np.array([body_link[s_[1]] for s_ in sites], dtype=np.int64),
+        site_pos=np.array([s_[2] for s_ in sites], dtype=np.float64).reshape(-1, 2),
+        sense_names=sense_names, body_names=seg_bodies,
+        q_default=np.array([L["q0"] for L in links], dtype=np.float64),
+        total_mass=total_mass, description=str(spec.get("description", "")), spec=spec)

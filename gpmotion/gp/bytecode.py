@@ -1,0 +1,198 @@
+"""DEAP trees -> postfix bytecode arrays, and trees <-> plain-data token lists.
+
+Why bytecode: the rollout kernel runs every tree every simulation step inside
+numba; a flat (opcode, operand) stream keeps that loop free of Python.
+
+Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
+
+    ci[0]            n_trees
+    ci[1]            max stack need over the trees (<= STACK_CAP)
+    ci[2 + 3k + 0]   actuator index driven by tree k
+    ci[2 + 3k + 1]   start offset in ci of tree k's op stream
+    ci[2 + 3k + 2]   number of ops of tree k
+    then ops, two ints each: (opcode, operand)
+        opcode 0     push clamp(senses[operand])
+        opcode 1     push cf[operand]          (a constant)
+        opcode 2+k   apply primitive k of the pset (operand unused, 0)
+
+A zero row (padding) has n_trees = 0 and drives nothing.
+
+Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
+prefix list of primitive names, terminal names and numbers (constants).
+Parsing checks a whitelist and caps size/depth; it never evaluates text.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from typing import Sequence
+
+import numpy as np
+from deap import gp
+
+from gpmotion.controllers import ControllerBatch
+from gpmotion.gp.primitives import clamp
+from gpmotion.gp.pset import PsetInfo
+
+STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rejected
+MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
+MAX_TREE_DEPTH = 17     # Koza's depth limit
+HEADER = 2
+OP_PUSH_SENSE, OP_PUSH_CONST, OP_PRIM0 = 0, 1, 2
+
+
+def _is_erc(node) -> bool:
+    return isinstance(node, gp.Terminal) and isinstance(type(node), gp.MetaEphemeral)
+
+
+def compile_tree(tree, info: PsetInfo) -> tuple[list[tuple[int, int]], list[float], int]:
+    """One tree -> (ops [(opcode, operand)], constants, max stack need)."""
+    prim_op = {n: OP_PRIM0 + k for k, n in enumerate(info.primitive_names)}
+    term_sense = dict(zip(info.terminal_names, info.sense_indices))
+    nodes = list(tree)
+    if not nodes:
+        raise ValueError("empty tree")
+    ops: list[tuple[int, int]] = []
+    consts: list[float] = []
+    sp = need = 0
+    # prefix -> postfix: walk nodes right to left; a primitive closes its children
+    pending: list[list[tuple]] = []     # stack of postfix fragments
+    for node in reversed(nodes):
+        if isinstance(node, gp.Primitive):
+            if node.name not in prim_op:
+                raise ValueError(f"primitive {node.name!r} is not in this primitive set")
+            if len(pending) < node.arity:
+                raise ValueError("malformed tree (missing arguments)")
+            children = [pending.pop() for _ in range(node.arity)]
+            frag = [x for ch in children for x in ch] + [("p", prim_op[node.name], node.arity)]
+            pending.append(frag)
+        elif _is_erc(node):
+            pending.append([("c", float(node.value), 0)])
+        elif isinstance(node, gp.Terminal) and node.value in term_sense:
+            pending.append([("s", term_sense[node.value], 0)])
+        else:
+            raise ValueError(f"terminal {getattr(node, 'name', node)!r} is not in this primitive set")
+    if len(pending) != 1:
+        raise ValueError("malformed tree (not exactly one root)")
+    for kind, val, arity in pending[0]:
+        if kind == "s":
+            ops.append((OP_PUSH_SENSE, val))
+            sp += 1
+        elif kind == "c":
+            ops.append((OP_PUSH_CONST, len(consts)))
+            consts.append(clamp(val))
+            sp += 1
+        else:
+            ops.append((val, 0))
+            sp -= arity - 1
+        need = max(need, sp)
+    if need > STACK_CAP:
+        raise ValueError(f"tree needs a stack of {need} > {STACK_CAP}; "
+                         "lower the depth limit")
+    return ops, consts, need
+
+
+def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int]):
+    """A list of trees (one per actuator) -> (ci int64[:], cf float64[:])."""
+    if len(trees) != len(actuator_indices):
+        raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
+    n = len(trees)
+    compiled = [compile_tree(_as_tree(t, info), info) for t in trees]
+    ci = [n, max((c[2] for c in compiled), default=0)] + [0] * (3 * n)
+    cf: list[float] = []
+    for k, ((ops, consts, _), act) in enumerate(zip(compiled, actuator_indices)):
+        ci[HEADER + 3 * k: HEADER + 3 * k + 3] = [int(act), len(ci), len(ops)]
+        base = len(cf)
+        for op, arg in ops:
+            ci += [op, arg + base if op == OP_PUSH_CONST else arg]
+        cf += consts
+    return np.asarray(ci, dtype=np.int64), np.asarray(cf, dtype=np.float64)
+
+
+def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
+                 actuator_indices: Sequence[int], module: str | None = None) -> ControllerBatch:
+    """Individuals (each a list of trees or token lists) -> a rectangular batch.
+
+    ``module`` defaults to the generated interpreter for ``info``.
+    """
+    if module is None:
+        from gpmotion.gp.interpreter import interpreter_path
+        module = str(interpreter_path(info))
+    rows = [encode_trees(ind, info, actuator_indices) for ind in individuals]
+    li = max([len(r[0]) for r in rows] + [HEADER])
+    lf = max([len(r[1]) for r in rows] + [1])
+    ci = np.zeros((len(rows), li), dtype=np.int64)
+    cf = np.zeros((len(rows), lf), dtype=np.float64)
+    for i, (a, b) in enumerate(rows):
+        ci[i, :len(a)] = a
+        cf[i, :len(b)] = b
+    return ControllerBatch(module=str(module), ci=ci, cf=cf, cstate_size=STACK_CAP)
+
+
+# ---------------------------------------------------------------- tokens
+
+def _as_tree(t, info: PsetInfo) -> gp.PrimitiveTree:
+    return t if isinstance(t, gp.PrimitiveTree) else tokens_to_tree(t, info)
+
+
+def tree_to_tokens(tree) -> list:
+    """Prefix token list: primitive names, terminal names, floats for constants."""
+    out = []
+    for node in tree:
+        if isinstance(node, gp.Primitive):
+            out.append(node.name)
+        elif _is_erc(node):
+            out.append(float(node.value))
+        else:
+            out.append(node.value)
+    return out
+
+
+def tokens_to_tree(tokens, pset, max_size: int = MAX_TREE_SIZE,
+                   max_depth: int = MAX_TREE_DEPTH) -> gp.PrimitiveTree:
+    """Parse a token list against the pset's whitelist; ValueError on bad input."""
+    info = pset if isinstance(pset, PsetInfo) else None
+    pset = info.pset if info else pset
+    if not isinstance(tokens, (list, tuple)):
+        raise ValueError(f"a tree must be a list of tokens, got {type(tokens).__name__}")
+    if not tokens:
+        raise ValueError("empty token list")
+    if len(tokens) > max_size:
+        raise ValueError(f"tree has {len(tokens)} tokens > size cap {max_size}")
+    prims = {p.name: p for ps in pset.primitives.values() for p in ps}
+    args = set(pset.arguments)
+    ercs = [t for ts in pset.terminals.values() for t in ts if isinstance(t, gp.MetaEphemeral)]
+    nodes = []
+    open_slots = [1]         # unfilled argument slots per open level (depth = len - 1)
+    for i, tok in enumerate(tokens):
+        if not open_slots:
+            raise ValueError(f"extra tokens after a complete tree at position {i}: {tok!r}")
+        depth = len(open_slots) - 1
+        if depth > max_depth:
+            raise ValueError(f"tree deeper than depth cap {max_depth}")
+        open_slots[-1] -= 1
+        if isinstance(tok, str):
+            if tok in prims:
+                nodes.append(prims[tok])
+                open_slots.append(prims[tok].arity)
+            elif tok in args:
+                nodes.append(pset.mapping[tok])
+            else:
+                shown = tok if len(tok) <= 40 else tok[:40] + "..."
+                raise ValueError(f"unknown token {shown!r} at position {i}; known primitives: "
+                                 f"{', '.join(sorted(prims))}; terminals: {', '.join(pset.arguments)}")
+        elif isinstance(tok, numbers.Real) and not isinstance(tok, bool):
+            if not math.isfinite(tok):
+                raise ValueError(f"non-finite constant {tok!r} at position {i}")
+            if not ercs:
+                raise ValueError("this primitive set has no constants")
+            node = ercs[0].__new__(ercs[0])
+            node.value = float(tok)
+            nodes.append(node)
+        else:
+            raise ValueError(f"bad token {tok!r} at position {i} (need a name or a number)")
+        while open_slots and open_slots[-1] == 0:
+            open_slots.pop()
+    if open_slots:
+        raise ValueError("incomplete tree: a primitive is missing arguments")
+    return gp.PrimitiveTree(nodes)

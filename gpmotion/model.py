@@ -1,0 +1,124 @@
+"""The compiled figure: flat arrays the kernels read, plus the names around them.
+
+Every link carries one degree of freedom (planar kernel).  A `planar` root
+is the chain  slide-x → slide-z → hinge  (the first two links massless), so
+the generalized coordinates are ``q = [x, z, pitch, hinge angles...]``.  A
+`fixed` root body is welded to the world: it owns no link, and its child
+joints hang from the world (parent -1) at the root placement.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+# joint (link) types
+REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
+# actuation per dof
+PASSIVE, ACTUATED = 0, 1
+# actuation modes for a rollout
+PD, KINEMATIC = 0, 1
+
+
+class Model(NamedTuple):
+    """Arrays only: the one thing the numba kernels see (order parents-first)."""
+    parent: np.ndarray      # int64[nl]   parent link or -1 (world)
+    jtype: np.ndarray       # int64[nl]   REVOLUTE / SLIDE_X / SLIDE_Z
+    xtree: np.ndarray       # float64[nl, 3]  (angle, rx, rz) parent→joint frame
+    mass: np.ndarray        # float64[nl]
+    com: np.ndarray         # float64[nl, 2]  centre of mass in link frame
+    icom: np.ndarray        # float64[nl]     rotational inertia about the com
+    lo: np.ndarray          # float64[nl]     joint limits (±inf when free)
+    hi: np.ndarray
+    damping: np.ndarray     # float64[nl]     passive viscous joint damping
+    act_dof: np.ndarray     # int64[na]   dof of each actuator
+    kp: np.ndarray          # float64[na]
+    kd: np.ndarray
+    tau_max: np.ndarray
+    neutral: np.ndarray     # float64[na]
+    cp_link: np.ndarray     # int64[nc]   contact points (-1: world-fixed body)
+    cp_pos: np.ndarray      # float64[nc, 2]
+    seg_link: np.ndarray    # int64[ns]   capsules for drawing and obstacles
+    seg_a: np.ndarray       # float64[ns, 2]
+    seg_b: np.ndarray
+    seg_r: np.ndarray       # float64[ns]
+    fixed_pose: np.ndarray  # float64[3]  pose of a fixed root body (θ, x, z)
+    base_link: int          # link whose pose is "the base" (-1: fixed root)
+    limit_k: float          # joint-limit spring (N·m/rad)
+    limit_c: float          # joint-limit damper (N·m·s/rad)
+    sense_lo: np.ndarray    # float64[n_senses] ranges of the normalized view
+    sense_hi: np.ndarray
+
+
+class Scene(NamedTuple):
+    """World settings shared by every episode of a rollout."""
+    gravity: float          # m/s², acting along −z
+    ground: int             # 1: a ground plane at ground_z, 0: none
+    ground_z: float
+    k_ground: float         # normal stiffness per contact point (N/m)
+    c_ground: float         # normal damping per contact point (N·s/m)
+    mu: float               # Coulomb friction coefficient
+    k_tangent: float        # stick spring of the friction anchor (N/m)
+    c_tangent: float        # stick damper (N·s/m)
+    poles: np.ndarray       # float64[np, 3] horizontal poles: x, z, radius
+    k_pole: float
+    c_pole: float
+    goal: np.ndarray        # float64[2] the goal point (x, z) senses refer to
+
+
+def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
+               c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
+               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0)) -> Scene:
+    """A Scene with the defaults every shipped figure is stable with at dt=1 ms."""
+    poles = np.asarray(poles, dtype=np.float64).reshape(-1, 3)
+    for name, v in (("gravity", gravity), ("k_ground", k_ground), ("c_ground", c_ground),
+                    ("mu", mu), ("k_tangent", k_tangent), ("c_tangent", c_tangent),
+                    ("k_pole", k_pole), ("c_pole", c_pole)):
+        if not np.isfinite(v) or v < 0:
+            raise ValueError(f"scene: {name} must be a finite number >= 0, got {v!r}")
+    if not np.all(np.isfinite(poles)) or np.any(poles[:, 2] <= 0):
+        raise ValueError("scene: poles need finite x, z and a radius > 0")
+    return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
+                 float(c_ground), float(mu), float(k_tangent), float(c_tangent),
+                 poles, float(k_pole), float(c_pole),
+                 np.asarray(goal, dtype=np.float64).reshape(2))
+
+
+@dataclass
+class Figure:
+    """A compiled figure: the Model plus names for people and tasks."""
+    name: str
+    model: Model
+    root: str                       # "planar" or "fixed"
+    link_names: list[str]           # per dof
+    actuator_names: list[str]       # joint names of actuated hinges
+    contact_names: list[str]
+    site_names: list[str]
+    site_link: np.ndarray
+    site_pos: np.ndarray
+    sense_names: list[str]
+    body_names: list[str]
+    q_default: np.ndarray           # initial q from the spec
+    total_mass: float
+    description: str = ""
+    spec: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def nq(self) -> int:
+        return len(self.model.parent)
+
+    @property
+    def n_act(self) -> int:
+        return len(self.model.act_dof)
+
+    def sense_index(self, name: str) -> int:
+        try:
+            return self.sense_names.index(name)
+        except ValueError:
+            raise KeyError(f"figure {self.name!r} has no sense {name!r}; "
+                           f"senses: {', '.join(self.sense_names)}") from None
+
+    def actuator_limits(self) -> np.ndarray:
+        m = self.model
+        return np.stack([m.lo[m.act_dof], m.hi[m.act_dof]], axis=1)

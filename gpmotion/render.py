@@ -1,0 +1,311 @@
+"""Pictures of runs: strobe filmstrips, GIFs, learning curves (DESIGN.md §8).
+
+Decoupled from the simulator: everything takes plain arrays, so a
+Trajectory, a replay file or a test's synthetic figure draw the same way.
+Segments are ``float[F, n_seg, 2, 2]`` — frame, segment, endpoint (a, b),
+(x, z) — and each is drawn as a capsule *polygon* of its radius in data units,
+so limbs have their true thickness at any zoom (a line width in points would
+not).
+
+Uses matplotlib's object API with an Agg canvas — no pyplot, no global
+backend switch, no screen.  Every output goes to a temp file beside the
+target and is moved into place only when complete
+(:func:`gpmotion.records.atomic_output`), so a crash never leaves a
+half-written picture.  Frames containing NaN/inf (a diverged episode's tail)
+are skipped; no usable frame at all is a ValueError.
+"""
+from __future__ import annotations
+
+import os
+from typing import Mapping, Sequence
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.gridspec import GridSpec
+from matplotlib.patches import Circle
+from PIL import Image
+
+from gpmotion.records import atomic_output
+
+_ARC = 9  # points per half-circle of a capsule (odd: the tip is a vertex)
+
+
+# ------------------------------------------------------------------ geometry
+
+def capsules(seg: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """Outline polygons ``float[n_seg, 2*_ARC, 2]`` of segments ``[n_seg, 2, 2]``
+    with the given radii; a zero-length segment becomes a disc."""
+    a, b = seg[:, 0], seg[:, 1]
+    d = b - a
+    phi = np.arctan2(d[:, 1], d[:, 0])[:, None]
+    half = np.linspace(-np.pi / 2, np.pi / 2, _ARC)[None, :]
+    r = np.asarray(radii, float)[:, None]
+    ang_b, ang_a = phi + half, phi + half + np.pi
+    pts_b = b[:, None, :] + r[..., None] * np.stack([np.cos(ang_b), np.sin(ang_b)], -1)
+    pts_a = a[:, None, :] + r[..., None] * np.stack([np.cos(ang_a), np.sin(ang_a)], -1)
+    return np.concatenate([pts_b, pts_a], axis=1)
+
+
+def _check_motion(segments, radii, times):
+    """Validated arrays and the indices of frames that are entirely finite."""
+    seg = np.asarray(segments, dtype=float)
+    if seg.ndim != 4 or seg.shape[2:] != (2, 2):
+        raise ValueError(f"segments must have shape [frames, n_seg, 2, 2], got {seg.shape}")
+    if seg.shape[0] == 0 or seg.shape[1] == 0:
+        raise ValueError(f"no frames or no segments to draw (shape {seg.shape})")
+    rad = np.asarray(radii, dtype=float).reshape(-1)
+    if rad.shape != (seg.shape[1],) or not np.all(np.isfinite(rad)) or np.any(rad < 0):
+        raise ValueError(f"radii must be {seg.shape[1]} finite values ≥ 0, got {rad}")
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if t.shape != (seg.shape[0],):
+        raise ValueError(f"times must have {seg.shape[0]} entries, got {t.shape[0]}")
+    ok = np.flatnonzero(np.isfinite(seg).all(axis=(1, 2, 3)) & np.isfinite(t))
+    if ok.size == 0:
+        raise ValueError("every frame contains NaN/inf: nothing to draw")
+    return seg, rad, t, ok
+
+
+def _pick(ok: np.ndarray, n: int) -> np.ndarray:
+    """At most ``n`` evenly spaced entries of ``ok``, first and last included."""
+    if n < 1:
+        raise ValueError(f"need at least one frame to draw, got {n}")
+    if ok.size <= n:
+        return ok
+    return ok[np.unique(np.linspace(0, ok.size - 1, n).round().astype(int))]
+
+
+def _scene_limits(seg, rad, frames, poles, ground_z, goal, pad=0.1):
+    pts = seg[frames].reshape(-1, 2)
+    r = rad.max()
+    lo, hi = pts.min(0) - r, pts.max(0) + r
+    if poles is not None and len(poles):
+        lo = np.minimum(lo, (poles[:, :2] - poles[:, 2:3]).min(0))
+        hi = np.maximum(hi, (poles[:, :2] + poles[:, 2:3]).max(0))
+    if goal is not None:
+        lo, hi = np.minimum(lo, goal), np.maximum(hi, goal)
+    if ground_z is not None:
+        lo[1], hi[1] = min(lo[1], ground_z), max(hi[1], ground_z)
+    span = np.maximum(hi - lo, 1e-3)
+    m = pad * span.max()
+    return lo - m, hi + m
+
+
+def _check_scene(poles, goal):
+    if poles is not None:
+        poles = np.asarray(poles, float).reshape(-1, 3)
+        poles = poles[np.isfinite(poles).all(1)]
+    if goal is not None:
+        goal = np.asarray(goal, float).reshape(-1)[:2]
+        if goal.size != 2 or not np.isfinite(goal).all():
+            goal = None
+    return poles, goal
+
+
+def _draw_scene(ax, lo, hi, poles, ground_z, goal, small=False):
+    if ground_z is not None:
+        ax.axhspan(lo[1] - 10 * (hi[1] - lo[1]), ground_z, color="0.9", zorder=0)
+        ax.axhline(ground_z, color="0.35", lw=0.8 if small else 1.2, zorder=1)
+    if poles is not None:
+        for x, z, r in poles:
+            ax.add_patch(Circle((x, z), r, color="tab:red", alpha=0.8, zorder=2))
+    if goal is not None:
+        ax.plot([goal[0]], [goal[1]], marker="*", ms=7 if small else 14,
+                color="gold", mec="k", mew=0.6, zorder=5, ls="none")
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal", adjustable="box")
+
+
+def _figure_body(ax, seg_frame, rad, color, zorder=3, alpha=1.0):
+    pc = PolyCollection(capsules(seg_frame, rad), facecolors=[color],
+                        edgecolors=[tuple(c * 0.6 for c in color[:3]) + (1.0,)],
+                        linewidths=0.5, alpha=alpha, zorder=zorder)
+    ax.add_collection(pc)
+    return pc
+
+
+def _save_png(fig: Figure, path, dpi: int) -> None:
+    FigureCanvasAgg(fig)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=dpi)
+
+
+# -------------------------------------------------------------- filmstrip
+
+def filmstrip(path, segments, radii, times, *, poles=None, ground_z=0.0,
+              goal=None, n_frames: int = 10, title: str | None = None,
+              labels: Sequence[str | None] | None = None, strip: bool = True,
+              dpi: int = 120) -> None:
+    """The papers' strobe picture, saved as PNG.
+
+    Top: the figure at ``n_frames`` evenly spaced finite frames overlaid on one
+    axis, later frames darker, with ground, limbo poles (``float[n, 3]`` =
+    x, z, radius) and the goal (x, z).  Bottom (``strip=True``): the same
+    frames as small multiples at one common scale, each centred on the
+    figure and captioned with its time; ``labels`` (one per *recorded*
+    frame, entries may be None/"") add a word such as "apex" to a caption.
+    """
+    seg, rad, t, ok = _check_motion(segments, radii, times)
+    poles, goal = _check_scene(poles, goal)
+    if labels is not None and len(labels) != seg.shape[0]:
+        raise ValueError(f"labels must have one entry per frame ({seg.shape[0]}), "
+                         f"got {len(labels)}")
+    frames = _pick(ok, n_frames)
+    lo, hi = _scene_limits(seg, rad, frames, poles, ground_z, goal)
+    span = hi - lo
+    n = len(frames)
+    width = max(7.0, min(1.3 * n, 16.0))
+    top_h = float(np.clip(width * span[1] / span[0], 1.5, 7.0))
+    # Small multiples share the strobe's z range (heights stay comparable,
+    # the ground stays in view) and one x window centred on each frame.
+    xs = seg[frames][..., 0].reshape(n, -1)
+    x_mid = 0.5 * (xs.min(1) + xs.max(1))
+    half_x = max(0.5 * np.ptp(xs, axis=1).max() + rad.max() + 0.05 * span[1],
+                 0.25 * span[1])
+    cell_w = width / n
+    bot_h = float(np.clip(cell_w * span[1] / (2 * half_x), 0.8, 3.0)) + 0.3 if strip else 0.0
+
+    fig = Figure(figsize=(width, top_h + bot_h + (0.4 if title else 0.1)))
+    gs = GridSpec(2 if strip else 1, n, figure=fig,
+                  height_ratios=[top_h, bot_h] if strip else None)
+    ax = fig.add_subplot(gs[0, :])
+    cmap = colormaps["Blues"]
+    colors = [cmap(v) for v in np.linspace(0.35, 1.0, n)]
+    _draw_scene(ax, lo, hi, poles, ground_z, goal)
+    for k, (i, c) in enumerate(zip(frames, colors)):
+        _figure_body(ax, seg[i], rad, c, zorder=3 + k / n, alpha=0.85)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("z (m)")
+    if title:
+        ax.set_title(title)
+    if strip:
+        for k, (i, c) in enumerate(zip(frames, colors)):
+            sub = fig.add_subplot(gs[1, k])
+            _draw_scene(sub, (x_mid[k] - half_x, lo[1]), (x_mid[k] + half_x, hi[1]),
+                        poles, ground_z, goal, small=True)
+            _figure_body(sub, seg[i], rad, c)
+            caption = f"t={t[i]:.2f}s"
+            if labels is not None and labels[i]:
+                caption += f"\n{labels[i]}"
+            sub.set_title(caption, fontsize=7)
+            sub.set_xticks([])
+            sub.set_yticks([])
+    fig.set_layout_engine("constrained")
+    _save_png(fig, path, dpi)
+
+
+# ---------------------------------------------------------------- animate
+
+def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
+            goal=None, fps: int = 25, max_frames: int = 200,
+            title: str | None = None, dpi: int = 80) -> int:
+    """An animated GIF of the motion; returns the number of frames written.
+
+    Frames are subsampled evenly to at most ``max_frames``; axis limits come
+    from the whole motion so the camera stays still; the recorded time is
+    shown in a corner.  Frames are quantized to a palette as they are drawn,
+    so memory stays small even at ``max_frames``.
+    """
+    seg, rad, t, ok = _check_motion(segments, radii, times)
+    poles, goal = _check_scene(poles, goal)
+    if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
+        raise ValueError(f"fps must be in (0, 100], got {fps!r}")
+    frames = ok
+    lo, hi = _scene_limits(seg, rad, ok, poles, ground_z, goal)
+    span = hi - lo
+    width = 6.0
+    fig = Figure(figsize=(width, float(np.clip(width * span[1] / span[0], 2.0, 6.0))))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    _draw_scene(ax, lo, hi, poles, ground_z, goal)
+    if title:
+        ax.set_title(title)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    fig.set_layout_engine("constrained")
+    body = _figure_body(ax, seg[frames[0]], rad, colormaps["Blues"](0.85))
+    clock = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top",
+                    family="monospace", fontsize=9)
+    images = []
+    for i in frames:
+        body.set_verts(capsules(seg[i], rad))
+        clock.set_text(f"t = {t[i]:6.2f} s")
+        fig.canvas.draw()
+        rgba = np.asarray(fig.canvas.buffer_rgba())
+        images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
+            256, method=Image.Quantize.MEDIANCUT))
+    with atomic_output(path) as tmp:
+        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                       duration=max(int(round(1000 / fps)), 20), loop=0)
+    return len(images)
+
+
+# ----------------------------------------------------------------- curves
+
+def _finite_xy(x, y, name):
+    x = np.asarray(x, float).reshape(-1)
+    y = np.asarray(y, float).reshape(-1)
+    if x.size == 0:
+        raise ValueError(f"{name}: no points to plot")
+    if y.shape != x.shape:
+        raise ValueError(f"{name}: {y.size} values for {x.size} x positions")
+    y = np.where(np.isfinite(y), y, np.nan)
+    return x, y
+
+
+def curve(path, generations_or_evals, best, median=None, xlabel: str = "generation",
+          ylabel: str = "fitness (lower is better)", title: str | None = None,
+          dpi: int = 120) -> None:
+    """Learning curve: best (and optionally median) score per generation.
+    Non-finite values leave gaps rather than wrecking the autoscale."""
+    x, yb = _finite_xy(generations_or_evals, best, "best")
+    if not np.isfinite(yb).any():
+        raise ValueError("best: every value is NaN/inf")
+    fig = Figure(figsize=(6, 4))
+    ax = fig.add_subplot()
+    ax.plot(x, yb, lw=1.8, label="best")
+    if median is not None:
+        _, ym = _finite_xy(x, median, "median")
+        ax.plot(x, ym, lw=1.2, ls="--", label="median")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    if title:
+        ax.set_title(title)
+    fig.set_layout_engine("constrained")
+    _save_png(fig, path, dpi)
+
+
+def curves_band(path, series: Mapping[str, tuple], xlabel: str = "generation",
+                ylabel: str = "fitness (lower is better)", title: str | None = None,
+                dpi: int = 120) -> None:
+    """Several families' learning curves: median line with the 25–75 %
+    quartile band, ``series[name] = (x, q25, q50, q75)``."""
+    if not series:
+        raise ValueError("curves_band: no series to plot")
+    fig = Figure(figsize=(6.5, 4))
+    ax = fig.add_subplot()
+    drawn = 0
+    for name, data in series.items():
+        if len(data) != 4:
+            raise ValueError(f"{name}: expected (x, q25, q50, q75)")
+        x, q25 = _finite_xy(data[0], data[1], name)
+        _, q50 = _finite_xy(x, data[2], name)
+        _, q75 = _finite_xy(x, data[3], name)
+        (line,) = ax.plot(x, q50, lw=1.6, label=str(name))
+        ax.fill_between(x, q25, q75, color=line.get_color(), alpha=0.25, lw=0)
+        drawn += np.isfinite(q50).any()
+    if not drawn:
+        raise ValueError("curves_band: every median value is NaN/inf")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    if title:
+        ax.set_title(title)
+    fig.set_layout_engine("constrained")
+    _save_png(fig, path, dpi)

@@ -1,0 +1,183 @@
+"""Batched rollout: many episodes in parallel (numba prange) → a Trajectory.
+
+The kernel is generated per controller kernel module (so the controller's
+``control`` is inlined into the step loop: no Python call per step) and
+cached on disk under a name that hashes every source it depends on.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from .. import cache
+from ..controllers import ControllerBatch
+from ..model import KINEMATIC, PD, Figure, Scene, make_scene
+from . import geometry
+from .episode_template import TEMPLATE
+
+_HERE = Path(__file__).parent
+_SIM_SOURCES = [_HERE / "planar.py", _HERE / "senses.py", _HERE / "episode_template.py",
+                _HERE.parent / "cache.py"]
+DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
+ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
+
+
+def kernel_for(control_module: str):
+    """Import (generating if needed) the rollout kernel for a controller module."""
+    ctrl_src = Path(control_module).read_bytes()
+    key = cache.digest(cache.file_digest(*_SIM_SOURCES), ctrl_src, numba.__version__,
+                       str(Path(control_module).resolve()))
+    path = cache.write_module(f"rollout_{key}",
+                              TEMPLATE.format(CONTROL_MODULE=str(Path(control_module).resolve())))
+    return cache.import_file(path)
+
+
+@dataclass
+class Trajectory:
+    """Recorded channels of a batch, frames every ``record_every`` steps.
+
+    Shapes: ``[E, F, ...]`` for E episodes and F frames.  Event channels
+    (contact_force, pole_hit, impact, energy) hold the max (sum for energy)
+    over the steps since the previous frame.
+    """
+    figure: Figure
+    scene: Scene
+    dt: float
+    record_every: int
+    times: np.ndarray          # [F]
+    q: np.ndarray              # [E, F, nq]
+    qd: np.ndarray             # [E, F, nq]
+    com: np.ndarray            # [E, F, 4]  x, z, vx, vz
+    contact_force: np.ndarray  # [E, F, nc] max ground normal force per contact point
+    pole_hit: np.ndarray       # [E, F]     max penetration into any pole (m)
+    impact: np.ndarray         # [E, F]     max total ground normal force (N)
+    energy: np.ndarray         # [E, F]     actuator work |τ·q̇|·dt since the previous frame (J)
+    targets: np.ndarray        # [E, F, n_act]
+    senses: np.ndarray | None  # [E, F, n_senses] when recorded
+    diverged: np.ndarray       # [E] bool
+    diverged_step: np.ndarray  # [E] step of divergence or −1
+
+    @property
+    def n_episodes(self) -> int:
+        return self.q.shape[0]
+
+    def episode(self, e: int) -> "Trajectory":
+        """A one-episode view (keeps the leading axis)."""
+        sl = slice(e, e + 1)
+        return replace(self, q=self.q[sl], qd=self.qd[sl], com=self.com[sl],
+                       contact_force=self.contact_force[sl], pole_hit=self.pole_hit[sl],
+                       impact=self.impact[sl], energy=self.energy[sl], targets=self.targets[sl],
+                       senses=None if self.senses is None else self.senses[sl],
+                       diverged=self.diverged[sl], diverged_step=self.diverged_step[sl])
+
+    def poses(self) -> np.ndarray:
+        return geometry.link_poses(self.figure.model, self.q)
+
+    def base(self) -> np.ndarray:
+        """Base (root body) pose [E, F, 3] = (pitch, x, z)."""
+        m = self.figure.model
+        if m.base_link < 0:
+            return np.broadcast_to(m.fixed_pose, self.q.shape[:2] + (3,)).copy()
+        return self.poses()[..., m.base_link, :]
+
+    def sites(self) -> np.ndarray:
+        f = self.figure
+        return geometry.points_world(f.model, self.poses(), f.site_link, f.site_pos)
+
+    def site(self, name: str) -> np.ndarray:
+        return self.sites()[..., self.figure.site_names.index(name), :]
+
+    def segments(self) -> np.ndarray:
+        return geometry.segments_world(self.figure.model, self.q)
+
+    def sense(self, name: str) -> np.ndarray:
+        if self.senses is None:
+            raise ValueError("senses were not recorded (rollout(..., record_senses=True))")
+        return self.senses[..., self.figure.sense_index(name)]
+
+
+def _batch_state(x, n, nq, default, what):
+    x = default if x is None else np.asarray(x, dtype=np.float64)
+    x = np.atleast_2d(x)
+    if x.shape[-1] != nq:
+        raise ValueError(f"{what} must have {nq} entries (one per dof), got {x.shape[-1]}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{what} must be finite")
+    return np.ascontiguousarray(np.broadcast_to(x, (n, nq)))
+
+
+def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_steps: int,
+            q0=None, qd0=None, dt: float = 1e-3, record_every: int = 10,
+            actuation: str = "pd", default_tau: float = 0.05, record_senses: bool = False,
+            threads: int | None = None) -> Trajectory:
+    """Simulate every episode of ``controller`` for ``n_steps`` steps of ``dt``."""
+    if actuation not in ACTUATION:
+        raise ValueError(f"actuation must be one of {sorted(ACTUATION)}, got {actuation!r}")
+    if not (np.isfinite(dt) and 0 < dt <= 0.01):
+        raise ValueError(f"dt must be in (0, 0.01] s, got {dt!r}")
+    if n_steps < 1 or record_every < 1:
+        raise ValueError("n_steps and record_every must be >= 1")
+    n_steps = -(-int(n_steps) // record_every) * record_every   # whole frames
+    E, nq, m = controller.n_episodes, figure.nq, figure.model
+    q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
+    qd0 = _batch_state(qd0, E, nq, np.zeros(nq), "qd0")
+    F = n_steps // record_every + 1
+    nc, na, ns = len(m.cp_link), len(m.act_dof), len(m.sense_lo)
+    out = dict(q=np.zeros((E, F, nq)), qd=np.zeros((E, F, nq)), com=np.zeros((E, F, 4)),
+               contact_force=np.zeros((E, F, nc)), pole_hit=np.zeros((E, F)),
+               impact=np.zeros((E, F)), energy=np.zeros((E, F)), targets=np.zeros((E, F, na)),
+               senses=np.zeros((E, F if record_senses else 1, ns)))
+    status = np.zeros((E, 2), dtype=np.int64)
+    cstate = np.zeros((E, max(1, controller.cstate_size)))
+    kernel = kernel_for(controller.module)
+    old_threads = numba.get_num_threads()
+    if threads:
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        kernel.rollout_batch(m, scene, float(dt), n_steps, int(record_every), ACTUATION[actuation],
+                             float(default_tau), DIVERGE_LIMIT, q0, qd0,
+                             np.ascontiguousarray(controller.ci, dtype=np.int64),
+                             np.ascontiguousarray(controller.cf, dtype=np.float64), cstate,
+                             bool(record_senses), out["q"], out["qd"], out["com"],
+                             out["contact_force"], out["pole_hit"], out["impact"], out["energy"],
+                             out["targets"], out["senses"], status)
+    finally:
+        numba.set_num_threads(old_threads)
+    senses = out.pop("senses")
+    return Trajectory(figure=figure, scene=scene, dt=dt, record_every=record_every,
+                      times=np.arange(F) * dt * record_every,
+                      senses=senses if record_senses else None,
+                      diverged=status[:, 0].astype(bool), diverged_step=status[:, 1], **out)
+
+
+def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,
+             q0=None, qd0=None, dt: float = 1e-3, record_every: int = 10,
+             actuation: str = "pd", default_tau: float = 0.05) -> Trajectory:
+    """One episode for scripts and tests.
+
+    ``targets``: None (hold neutral), an array [n_act] (constant), a pair
+    ``(times, targets[K, n_act])`` of keyframes, or a ControllerBatch.
+    """
+    from ..controllers import schedule
+    if isinstance(figure, str):
+        from ..figures import load_figure
+        figure = load_figure(figure)
+    if targets is None:
+        ctrl = schedule.constant(figure.model.neutral)
+    elif isinstance(targets, ControllerBatch):
+        ctrl = targets
+    elif isinstance(targets, tuple) and len(targets) == 2:
+        ctrl = schedule.keyframes(*targets)
+    else:
+        ctrl = schedule.constant(targets)
+    if not isinstance(targets, ControllerBatch) and targets is not None:
+        n = np.asarray(targets[1] if isinstance(targets, tuple) else targets).reshape(-1, figure.n_act if figure.n_act else 1)
+        if figure.n_act == 0 or n.shape[-1] != figure.n_act:
+            raise ValueError(f"targets: figure {figure.name!r} has {figure.n_act} actuators "
+                             f"({', '.join(figure.actuator_names)})")
+    scene = scene or make_scene()
+    return rollout(figure, scene, ctrl, n_steps=max(1, int(round(seconds / dt))), q0=q0, qd0=qd0,
+                   dt=dt, record_every=record_every, actuation=actuation, default_tau=default_tau)

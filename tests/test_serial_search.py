@@ -1,0 +1,138 @@
+"""Serial search (Fig. 3) on toy objectives: no simulator involved."""
+import json
+
+import numpy as np
+import pytest
+
+from gpmotion.bsr import genome as G
+from gpmotion.bsr import mutation as M
+from gpmotion.search.serial import SerialSearch
+
+LIMITS = np.array([[-1.0, 1.0], [-1.0, 1.0], [0.0, 2.0]])
+TARGET = np.array([0.3, -0.7, 1.5])
+
+
+def init_fn(rng):
+    return G.random_time_genome(rng, 4, LIMITS, 0.01, 2.0, 1.0)
+
+
+def toy_score(g):
+    return -float(np.sum((g.theta0 - TARGET) ** 2))
+
+
+def make(seed, **kw):
+    kw = {"n_working": 6, "n_generations": 120, "reseed_every": 20, **kw}
+    return SerialSearch(init_fn, M.make_mutate_fn(), rng=np.random.default_rng(seed), **kw)
+
+
+def run(search, sign=1.0, until=None):
+    while not search.done and (until is None or search.generation < until):
+        cands = search.ask()
+        search.tell([sign * toy_score(g) for g in cands])
+    return search
+
+
+def test_improves_monotonically():
+    s = run(make(0))
+    best = [b for _, b in s.history]
+    assert all(b2 >= b1 for b1, b2 in zip(best, best[1:]))
+    assert best[-1] > best[0] + 1.0 and best[-1] > -0.5
+    assert [e for e, _ in s.history] == [6 * (i + 1) for i in range(121)]
+    assert s.evaluations == 6 * 121 and s.best_score == best[-1]
+    assert toy_score(s.best_genome) == s.best_score
+    with pytest.raises(RuntimeError):
+        s.ask()
+
+
+def test_minimize_direction():
+    s = run(make(0, maximize=False), sign=-1.0)
+    best = [b for _, b in s.history]
+    assert all(b2 <= b1 for b1, b2 in zip(best, best[1:])) and best[-1] < 0.5
+
+
+def test_same_seed_identical_other_seed_differs():
+    a, b, c = run(make(42)), run(make(42)), run(make(43))
+    assert a.history == b.history and a.best_genome.to_dict() == b.best_genome.to_dict()
+    assert a.history != c.history
+
+
+@pytest.mark.parametrize("stop_between_ask_and_tell", [False, True])
+def test_state_dict_resumes_identically(stop_between_ask_and_tell):
+    full = run(make(5))
+    part = run(make(5), until=37)
+    if stop_between_ask_and_tell:
+        part.ask()
+    state = json.loads(json.dumps(part.state_dict(), allow_nan=False))
+    resumed = make(999, n_generations=1)     # wrong seed and config: the state wins
+    resumed.load_state_dict(state)
+    assert resumed.n_generations == 120
+    if stop_between_ask_and_tell:
+        assert resumed.pending is not None
+    run(resumed)
+    assert resumed.history == full.history
+    assert resumed.best_genome.to_dict() == full.best_genome.to_dict()
+    assert [g.to_dict() for g in resumed.working] == [g.to_dict() for g in full.working]
+    with pytest.raises(ValueError, match="checkpoint"):
+        resumed.load_state_dict({"format": "other"})
+
+
+def _marker_search(**kw):
+    """Genomes are plain dicts {'id': n}; mutants count up, so we see who survives."""
+    counter = iter(range(10_000))
+    return SerialSearch(lambda rng: {"id": next(counter)},
+                        lambda g, rng, extra: {"id": next(counter), "parent_extra": extra},
+                        rng=0, genome_to_json=dict, genome_from_json=dict, **kw)
+
+
+def test_replacement_is_strict_unless_ties_accepted():
+    for ties, expect in [(False, [0, 1]), (True, [2, 3])]:
+        s = _marker_search(n_working=2, n_generations=5, reseed_every=100, accept_ties=ties)
+        s.ask(); s.tell([1.0, 2.0])
+        s.ask(); s.tell([1.0, 2.0])                      # equal scores
+        assert [g["id"] for g in s.working] == expect
+        s.ask(); s.tell([0.5, 3.0])                      # worse, better
+        assert s.working[1]["id"] == 5 and s.working[0]["id"] == expect[0]
+
+
+def test_nonfinite_scores_are_worst():
+    s = _marker_search(n_working=2, n_generations=5, reseed_every=100)
+    s.ask(); s.tell([float("nan"), 1.0])
+    s.ask(); s.tell([-1e9, float("inf")])
+    assert [g["id"] for g in s.working] == [2, 1] and s.best_score == 1.0
+    json.dumps(s.state_dict(), allow_nan=False)
+
+
+def test_reseed_copies_top_half_over_bottom_half():
+    s = _marker_search(n_working=4, n_generations=5, reseed_every=1)
+    s.ask(); s.tell([0.0, 0.0, 0.0, 0.0])
+    s.ask(); s.tell([1.0, 4.0, 2.0, 3.0], extras=[[1.0], [4.0], [2.0], [3.0]])
+    # ranks: 1 (4.0), 3 (3.0), 2, 0 -> slot 2 <- slot 1, slot 0 <- slot 3
+    assert list(s.scores) == [3.0, 4.0, 4.0, 3.0]
+    assert [g["id"] for g in s.working] == [7, 5, 5, 7]
+    assert s.working[2] is not s.working[1]
+    assert [float(e[0]) for e in s.extras] == [3.0, 4.0, 4.0, 3.0]
+    # the next mutants see their parent's trajectory (relevance heuristic input)
+    assert [c["parent_extra"][0] for c in s.ask()] == [3.0, 4.0, 4.0, 3.0]
+
+
+def test_sense_genomes_with_relevance_trajectories():
+    """Sense-based genomes + trajectories through ask/tell and a JSON checkpoint."""
+    V = 3
+
+    def init(rng):
+        return G.random_sense_genome(rng, 5, V, LIMITS, 0.01, 2.0)
+
+    def trajectory(g):       # stand-in for a rollout: deterministic sense path
+        return np.clip(np.linspace(0, 1, 20)[:, None] * (g.theta0[0] + 1.5) / 3.5, 0, 1)
+
+    s = SerialSearch(init, M.make_mutate_fn(p_reinit=0.5), n_working=4,
+                     n_generations=30, reseed_every=10, rng=1)
+    while not s.done:
+        c = s.ask()
+        s.tell([toy_score(g) for g in c], extras=[trajectory(g) for g in c])
+        if s.generation == 15:
+            state = json.loads(json.dumps(s.state_dict()))
+            s2 = SerialSearch(init, M.make_mutate_fn(p_reinit=0.5), rng=7)
+            s2.load_state_dict(state)
+            assert all(np.array_equal(a, b) for a, b in zip(s.extras, s2.extras))
+    assert s.history[-1][1] > s.history[0][1]
