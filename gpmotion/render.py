@@ -213,7 +213,7 @@ def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
     poles, goal = _check_scene(poles, goal)
     if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
         raise ValueError(f"fps must be in (0, 100], got {fps!r}")
-    frames = ok
+    frames = _pick(ok, int(max_frames))
     lo, hi = _scene_limits(seg, rad, ok, poles, ground_z, goal)
     span = hi - lo
     width = 6.0

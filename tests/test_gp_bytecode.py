@@ -5,6 +5,7 @@ Semantics are made identical, not approximately equal: the DEAP pset's
 functions are the clamped primitives (gpmotion.gp.pset), compile_reference
 clamps the senses, and both interpreters clamp every push and result.
 """
+import importlib.util
 import json
 import math
 import os
@@ -21,7 +22,12 @@ from gpmotion.gp.bytecode import (STACK_CAP, encode_batch, encode_trees, tokens_
                                   tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
-from reference.gp_interpreter_ref import control_ref, run_tree_ref
+
+REF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "reference", "gp_interpreter_ref.py")
+_spec = importlib.util.spec_from_file_location("gp_interpreter_ref", REF)
+_ref = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_ref)
+control_ref, run_tree_ref = _ref.control_ref, _ref.run_tree_ref
 
 SENSES = ["px", "pz", "vx", "angle_shoulder", "force_head_tip", "t", "unused"]
 TERMS = ["px", "vx", "angle_shoulder", "force_head_tip", "t"]
@@ -184,12 +190,14 @@ def test_kernels_run_without_jit(info, trees, tmp_path):
     progs = [(tree_to_tokens(t)) for t in trees[:40]]
     (tmp_path / "progs.json").write_text(json.dumps(progs))
     script = textwrap.dedent(f"""
-        import json, sys, numpy as np
-        sys.path.insert(0, {os.path.dirname(__file__)!r})
+        import importlib.util, json, numpy as np
         from gpmotion.gp.pset import build_pset, compile_reference
         from gpmotion.gp.bytecode import encode_batch, tokens_to_tree
         from gpmotion.gp.interpreter import load_interpreter
-        from reference.gp_interpreter_ref import control_ref
+        spec = importlib.util.spec_from_file_location("gp_interpreter_ref", {REF!r})
+        ref = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(ref)
+        control_ref = ref.control_ref
         info = build_pset({TERMS!r}, sense_names={SENSES!r})
         k = load_interpreter(info)
         assert not hasattr(k.run_tree, "py_func"), "JIT not disabled"

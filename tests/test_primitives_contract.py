@@ -1,9 +1,11 @@
 """Every registered primitive passes the public check_primitive; user plugin
 folders register, check and reach the generated interpreter; duplicates fail."""
+import math
+
 import numpy as np
 import pytest
 
-from gpmotion.check import check_primitive
+from gpmotion.check import check_primitive, njit_copy
 from gpmotion.gp import primitives
 from gpmotion.gp.bytecode import STACK_CAP, encode_trees, tokens_to_tree
 from gpmotion.gp.interpreter import interpreter_source, load_interpreter
@@ -34,6 +36,20 @@ def registry(monkeypatch):
 def test_builtin_set_is_complete():
     assert {"add", "sub", "mul", "div", "iflte", "sin", "cos", "abs"} <= set(BUILTIN)
     assert primitives.get("div").symbol == "%" and primitives.get("iflte").arity == 4
+    import gpmotion.primitives as builtin_package           # the folder form is the same set
+    assert primitives.load_plugins(builtin_package.__path__[0]) == []
+
+
+@pytest.mark.parametrize("name, args, want", [
+    ("div", (3.0, 0.0), 1.0), ("div", (3.0, 5e-10), 1.0), ("div", (3.0, -2.0), -1.5),
+    ("iflte", (1.0, 1.0, 2.0, 3.0), 2.0), ("iflte", (1.5, 1.0, 2.0, 3.0), 3.0),
+    ("sin", (math.inf,), 0.0), ("cos", (math.nan,), 0.0), ("cos", (0.0,), 1.0),
+    ("abs", (-2.5,), 2.5), ("sub", (1.0, 3.0), -2.0),
+])
+def test_builtin_semantics(name, args, want):
+    prim = primitives.get(name)
+    assert prim.func(*args) == want
+    assert njit_copy(prim)(*args) == want
 
 
 @pytest.mark.parametrize("name", BUILTIN)

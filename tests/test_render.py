@@ -28,9 +28,9 @@ def swinging_chain(n_frames=60, duration=2.0):
 
 def open_image(path):
     assert path.exists() and path.stat().st_size > 0
-    im = Image.open(path)
-    im.load()
-    return im
+    with Image.open(path) as im:
+        im.load()
+        return im
 
 
 def no_temp_files(directory):
@@ -65,7 +65,8 @@ def test_filmstrip_draws_later_frames_darker(tmp_path):
     seg[:, :, :, 0] += np.linspace(0, 20, len(t))[:, None, None]  # far apart
     out = tmp_path / "f.png"
     render.filmstrip(out, seg, RADII, t, n_frames=3, strip=False, ground_z=None)
-    rgb = np.asarray(Image.open(out).convert("RGB"), dtype=float)
+    with Image.open(out) as im:
+        rgb = np.asarray(im.convert("RGB"), dtype=float)
     body = rgb[..., 2] - rgb[..., 0] > 40          # the blue figure pixels
     light = rgb.sum(-1)
     cols = rgb.shape[1]
@@ -111,18 +112,19 @@ def test_animate_writes_gif_within_frame_budget(tmp_path):
     out = tmp_path / "motion.gif"
     n = render.animate(out, seg, RADII, t, poles=[[0.6, 1.2, 0.05]], goal=(1.0, 0.0),
                        fps=20, max_frames=12, title="swing")
-    im = open_image(out)
-    assert im.format == "GIF"
-    assert 2 <= im.n_frames <= 12 and n <= 12
-    assert im.info.get("duration") == 50
-    assert im.size[0] > 100 and im.size[1] > 50
+    with Image.open(out) as im:
+        assert im.format == "GIF"
+        assert 2 <= im.n_frames <= 12 and n <= 12
+        assert im.info.get("duration") == 50
+        assert im.size[0] > 100 and im.size[1] > 50
     assert no_temp_files(tmp_path)
 
 
 def test_animate_short_motion_keeps_all_frames(tmp_path):
     seg, t = swinging_chain(n_frames=4)
     n = render.animate(tmp_path / "m.gif", seg, RADII, t, max_frames=200)
-    assert n == 4 and Image.open(tmp_path / "m.gif").n_frames == 4
+    with Image.open(tmp_path / "m.gif") as im:
+        assert n == 4 and im.n_frames == 4
 
 
 def test_failed_render_keeps_old_file(tmp_path, monkeypatch):

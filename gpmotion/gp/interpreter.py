@@ -65,7 +65,7 @@ def run_tree(ci, cf, tree_index, senses, stack):
         if op == {push_sense}:
             if sp >= cap:
                 return 0.0
-            stack[sp] = senses[arg]
+            stack[sp] = _clamp(senses[arg])
             sp += 1
         elif op == {push_const}:
             if sp >= cap:

@@ -1,0 +1,14 @@
+"""Define a GP primitive and check it (run: python examples/user_primitive.py)."""
+import math
+
+from gpmotion.check import check_primitive
+from gpmotion.gp.primitives import primitive
+
+
+@primitive("tanh", arity=1)
+def tanh(a):
+    return math.tanh(a)          # pure scalar code numba can compile
+
+
+check_primitive("tanh")          # raises AssertionError with the reason if unfit
+print("tanh passes check_primitive")
