@@ -74,6 +74,11 @@ def test_min_lambda_rule_never_wins():
     assert G.SenseGenome.weights(g)[0] == 0.0
     out = run_sense(G.encode_batch([g], [1, 0], 1), [np.array([0.5, 0.5])] * 3, 1)
     assert [o[2] for o in out] == [0, 1, 1]
+    # outside rule 1's box, inside rule 0's: rule 0 scores exactly 0 (not
+    # positive), rule 1 negative -> rule 1 stays (raw value 1.9 to leave box 1)
+    rows = [np.array([0.5, 0.5])] * 2 + [np.array([0.5, 1.9])]
+    out = run_sense(G.encode_batch([g], [1, 0], 1), rows, 1)
+    assert [o[2] for o in out] == [0, 1, 1]
 
 
 def test_kernel_matches_reference_random():
@@ -317,3 +322,18 @@ def test_secondary_terms():
     assert S.rotations(wrapped) == 2.0
     assert S.rotations(wrapped, whole=False) == pytest.approx(2.6)
     assert S.rotations(np.stack([wrapped, np.zeros(400)])).tolist() == [2.0, 0.0]
+
+
+def test_table1_indices_and_normalized_trajectory():
+    names = ["px", "com_z", "com_vz", "angle_a", "angle_b", "rate_a", "rate_b",
+             "force_1", "force_2", "force_3"]
+    idx = G.table1_sense_indices(names)
+    assert idx.tolist() == [3, 4, 7, 8, 9, 1, 2]        # angles, forces, com_z, com_vz
+    with pytest.raises(ValueError, match="com_vz"):
+        G.table1_sense_indices(names[:2])
+    lo, hi = np.zeros(10), np.full(10, 2.0)
+    hi[0] = 0.0                                          # empty range -> 0.5
+    raw = np.tile(np.arange(10.0) / 4, (2, 5, 1))        # [E, F, n_senses]
+    y = M.normalized_sense_trajectory(raw, lo, hi, [0, 1, 9])
+    assert y.shape == (2, 5, 3)
+    np.testing.assert_allclose(y[0, 0], [0.5, 0.125, 1.0])

@@ -223,6 +223,23 @@ def genome_from_dict(d: dict) -> SenseGenome | TimeGenome:
                      f"{SENSE_FORMAT!r} or {TIME_FORMAT!r}")
 
 
+def table1_sense_indices(sense_names) -> np.ndarray:
+    """Indices of Table 1's senses in a figure's sense vector.
+
+    Joint angles (``angle_*``), contact forces (``force_*``), ``com_z`` and
+    ``com_vz``: V = n_act + n_contacts + 2, which is the paper's 2N+2 for an
+    N-rod chain with N−1 joints and N+1 rod endpoints as contact points.
+    """
+    names = list(sense_names)
+    idx = [i for i, n in enumerate(names) if n.startswith("angle_")]
+    idx += [i for i, n in enumerate(names) if n.startswith("force_")]
+    for n in ("com_z", "com_vz"):
+        if n not in names:
+            raise ValueError(f"sense {n!r} missing; Table 1 needs it")
+        idx.append(names.index(n))
+    return np.array(idx, dtype=np.int64)
+
+
 def random_theta0(rng, limits, n_rules):
     limits = np.asarray(limits, dtype=np.float64)
     return rng.uniform(limits[:, 0], limits[:, 1], (n_rules, limits.shape[0]))

@@ -31,6 +31,20 @@ P_REINIT = 1.0 / 3.0
 CREEP = {"mu": 0.05, "log_side": 0.1, "theta_frac": 0.05, "log_tau": 0.1}
 
 
+def normalized_sense_trajectory(raw, sense_lo, sense_hi, sense_indices) -> np.ndarray:
+    """Relevance-heuristic input from *raw* recorded senses ``[..., F, n_senses]``.
+
+    Same mapping as the rollout's ``senses_norm`` (clip((s − lo)/(hi − lo), 0,
+    1), 0.5 for an empty range), then the columns the controller reads.
+    """
+    raw = np.asarray(raw, dtype=np.float64)
+    lo, hi = np.asarray(sense_lo, np.float64), np.asarray(sense_hi, np.float64)
+    span = hi - lo
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.where(span > 0, (raw - lo) / np.where(span > 0, span, 1.0), 0.5)
+    return np.clip(y, 0.0, 1.0)[..., np.asarray(sense_indices, dtype=np.int64)]
+
+
 def relevant_stimulus(rng: np.random.Generator, trajectory) -> tuple | None:
     """A Table-2-sized box with a corner on a random trajectory point.
 

@@ -69,7 +69,7 @@ def select_rule(ci, cf, senses_norm, previous):
             if d2 > worst:
                 worst = d2
         score = weight * (1.0 - worst)
-        if score >= best_score:
+        if score > best_score:
             best_score = score
             best = j
     return best

@@ -297,10 +297,11 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
     for i in range(q.shape[0]):
         tau[i] = -M.damping[i] * qd[i]
         presc[i] = 0
+        # a limit is a unilateral spring-damper: it pushes back, never pulls
         if q[i] < M.lo[i]:
-            tau[i] += M.limit_k * (M.lo[i] - q[i]) - (M.limit_c * qd[i] if qd[i] < 0 else 0.0)
+            tau[i] += max(0.0, M.limit_k * (M.lo[i] - q[i]) - M.limit_c * qd[i])
         elif q[i] > M.hi[i]:
-            tau[i] += M.limit_k * (M.hi[i] - q[i]) - (M.limit_c * qd[i] if qd[i] > 0 else 0.0)
+            tau[i] += min(0.0, M.limit_k * (M.hi[i] - q[i]) - M.limit_c * qd[i])
     for a in range(M.act_dof.shape[0]):
         i = M.act_dof[a]
         target = targets[a]

@@ -1,0 +1,172 @@
+"""Plain-numpy twin of gpmotion.sim.planar, written the textbook way.
+
+Full 3×3 matrices (spatial_v2's planar conventions), RNEA for the bias
+forces and CRBA for the joint-space inertia, then a dense solve — a
+different algorithm from the kernel's ABA, so agreement is meaningful.
+"""
+import numpy as np
+
+REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
+
+
+def xpln(theta, r):
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[1.0, 0.0, 0.0],
+                     [s * r[0] - c * r[1], c, s],
+                     [c * r[0] + s * r[1], -s, c]])
+
+
+def crm(v):
+    w, vx, vz = v
+    return np.array([[0.0, 0.0, 0.0], [vz, 0.0, -w], [-vx, w, 0.0]])
+
+
+def crf(v):
+    return -crm(v).T
+
+
+def mci(m, c, ic):
+    cx, cz = c
+    return np.array([[ic + m * (cx * cx + cz * cz), -m * cz, m * cx],
+                     [-m * cz, m, 0.0],
+                     [m * cx, 0.0, m]])
+
+
+def jcalc(jtype, q):
+    if jtype == REVOLUTE:
+        return xpln(q, (0.0, 0.0)), np.array([1.0, 0.0, 0.0])
+    if jtype == SLIDE_X:
+        return xpln(0.0, (q, 0.0)), np.array([0.0, 1.0, 0.0])
+    return xpln(0.0, (0.0, q)), np.array([0.0, 0.0, 1.0])
+
+
+def transforms(M, q):
+    out = []
+    for i in range(len(q)):
+        XJ, S = jcalc(M.jtype[i], q[i])
+        a0, rx, rz = M.xtree[i]
+        out.append((XJ @ xpln(a0, (rx, rz)), S))
+    return out
+
+
+def rnea(M, q, qd, qdd, gravity, fext):
+    """Inverse dynamics: joint forces for accelerations qdd (fext in link coords)."""
+    n = len(q)
+    tr = transforms(M, q)
+    v, a, f = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    for i in range(n):
+        X, S = tr[i]
+        p = M.parent[i]
+        vp = v[p] if p >= 0 else np.zeros(3)
+        ap = a[p] if p >= 0 else np.array([0.0, 0.0, gravity])
+        vJ = S * qd[i]
+        v[i] = X @ vp + vJ
+        a[i] = X @ ap + S * qdd[i] + crm(v[i]) @ vJ
+        I = mci(M.mass[i], M.com[i], M.icom[i])
+        f[i] = I @ a[i] + crf(v[i]) @ I @ v[i] - fext[i]
+    tau = np.zeros(n)
+    for i in range(n - 1, -1, -1):
+        X, S = tr[i]
+        tau[i] = S @ f[i]
+        if M.parent[i] >= 0:
+            f[M.parent[i]] += X.T @ f[i]
+    return tau
+
+
+def crba(M, q):
+    """Joint-space inertia matrix H(q)."""
+    n = len(q)
+    tr = transforms(M, q)
+    IC = [mci(M.mass[i], M.com[i], M.icom[i]) for i in range(n)]
+    for i in range(n - 1, -1, -1):
+        if M.parent[i] >= 0:
+            X = tr[i][0]
+            IC[M.parent[i]] = IC[M.parent[i]] + X.T @ IC[i] @ X
+    H = np.zeros((n, n))
+    for i in range(n):
+        fh = IC[i] @ tr[i][1]
+        H[i, i] = tr[i][1] @ fh
+        j = i
+        while M.parent[j] >= 0:
+            fh = tr[j][0].T @ fh
+            j = M.parent[j]
+            H[i, j] = H[j, i] = tr[j][1] @ fh
+    return H
+
+
+def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None):
+    """qdd (and the torques of prescribed dofs) by dense hybrid dynamics."""
+    n = len(q)
+    presc = np.zeros(n, bool) if presc is None else np.asarray(presc, bool)
+    C = rnea(M, q, qd, np.zeros(n), gravity, fext)
+    H = crba(M, q)
+    free = ~presc
+    qdd = np.zeros(n)
+    if presc.any():
+        qdd[presc] = np.asarray(presc_qdd)[presc]
+    rhs = tau[free] - C[free] - H[np.ix_(free, presc)] @ qdd[presc]
+    qdd[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
+    tau_out = np.array(tau, dtype=float)
+    tau_out[presc] = (H @ qdd + C)[presc]
+    return qdd, tau_out
+
+
+def poses_and_velocities(M, q, qd):
+    """World pose (θ, x, z) and spatial velocity (link coords) of every link."""
+    n = len(q)
+    tr = transforms(M, q)
+    pose, v = np.zeros((n, 3)), np.zeros((n, 3))
+    for i in range(n):
+        X, S = tr[i]
+        p = M.parent[i]
+        v[i] = (X @ v[p] if p >= 0 else 0) + S * qd[i]
+        th_p, xp, zp = pose[p] if p >= 0 else (0.0, 0.0, 0.0)
+        a0, rx, rz = M.xtree[i]
+        c, s = np.cos(th_p), np.sin(th_p)
+        jx, jz = xp + c * rx - s * rz, zp + s * rx + c * rz
+        if M.jtype[i] == REVOLUTE:
+            pose[i] = (th_p + a0 + q[i], jx, jz)
+        else:
+            d = np.array([q[i], 0.0]) if M.jtype[i] == SLIDE_X else np.array([0.0, q[i]])
+            th = th_p + a0
+            R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+            pose[i] = (th, *(np.array([jx, jz]) + R @ d))
+    return pose, v
+
+
+def energy(M, gravity, q, qd):
+    pose, v = poses_and_velocities(M, q, qd)
+    ke = pe = 0.0
+    for i in range(len(q)):
+        if M.mass[i] == 0:
+            continue
+        ke += 0.5 * v[i] @ mci(M.mass[i], M.com[i], M.icom[i]) @ v[i]
+        th, x, z = pose[i]
+        pe += M.mass[i] * gravity * (z + np.sin(th) * M.com[i, 0] + np.cos(th) * M.com[i, 1])
+    return ke + pe
+
+
+def momentum(M, q, qd):
+    """Linear momentum (px, pz) and angular momentum about the world origin."""
+    pose, v = poses_and_velocities(M, q, qd)
+    P = np.zeros(2)
+    L = 0.0
+    for i in range(len(q)):
+        m = M.mass[i]
+        if m == 0:
+            continue
+        th, x, z = pose[i]
+        c, s = np.cos(th), np.sin(th)
+        cx, cz = M.com[i]
+        gx, gz = x + c * cx - s * cz, z + s * cx + c * cz
+        w = v[i, 0]
+        lx, lz = v[i, 1] - w * cz, v[i, 2] + w * cx
+        vx, vz = c * lx - s * lz, s * lx + c * lz
+        P += m * np.array([vx, vz])
+        L += M.icom[i] * w + m * (gx * vz - gz * vx)
+    return P, L
+
+
+def ground_force(k, c, mu, pen, vz):
+    """Normal force of one penalty contact (never pulls)."""
+    return max(0.0, k * pen - c * vz) if pen > 0 else 0.0
