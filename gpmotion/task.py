@@ -1,0 +1,193 @@
+"""Tasks: what a motion should achieve, as a score over a batched Trajectory.
+
+A task is one small file in ``tasks/`` (or a user's ``--plugins`` folder):
+
+    @register_task
+    class LampHop(Task):
+        name = "lamp_hop"
+        figure = "lamp"
+        params = {"distance": 0.4, "seconds": 3.0}
+        terms = (Term("distance", 1.0, main=True), Term("late", 0.1, phase=(0.2, 0.6)))
+        def measure(self, traj): return {"distance": ..., "late": ...}
+
+Scores are costs (lower is better, as Gritz & Hahn); BSR's serial search is
+told the same numbers and minimizes them.  Every term's raw value, weight
+and phase-in factor are returned, so logs and replays show why a controller
+scored as it did (like Gymnasium's ``reward_info``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from .figures import load_figure
+from .model import Figure, Scene, make_scene
+
+WORST = 1e6        # cost of a diverged episode: finite, so JSON logs stay valid
+
+
+@dataclass(frozen=True)
+class Term:
+    """A named score term: ``weight × phase(progress) × value``.
+
+    ``phase = (a, b)``: the factor ramps from 0 at run progress a to 1 at b
+    (progress = generation / generations), so style points arrive after the
+    main goal has been learned, as in Gritz & Hahn.
+    """
+    name: str
+    weight: float
+    phase: tuple[float, float] = (0.0, 0.0)
+    main: bool = False
+    doc: str = ""
+
+    def factor(self, progress: float) -> float:
+        a, b = self.phase
+        if progress >= b:
+            return 1.0
+        if progress <= a:
+            return 0.0 if b > a else 1.0
+        return (progress - a) / (b - a)
+
+
+class Task:
+    """Base class; subclasses set the class attributes and ``measure``."""
+    name: ClassVar[str] = ""
+    figure: ClassVar[str] = ""
+    description: ClassVar[str] = ""
+    params: ClassVar[dict] = {"seconds": 3.0}
+    terms: ClassVar[tuple[Term, ...]] = ()
+    terminals: ClassVar[tuple[str, ...] | None] = None   # None: every sense of the figure
+    actuation: ClassVar[str] = "pd"
+    record_every: ClassVar[int] = 10
+    dt: ClassVar[float] = 1e-3
+    success_threshold: ClassVar[str] = ""                # human-readable, for tables
+
+    def __init__(self, **overrides):
+        unknown = set(overrides) - set(self.params)
+        if unknown:
+            raise ValueError(f"task {self.name}: unknown parameter(s) {sorted(unknown)}; "
+                             f"known: {sorted(self.params)}")
+        self.p = dict(self.params)
+        for k, v in overrides.items():
+            default = self.params[k]
+            if isinstance(default, (int, float)) and not isinstance(default, bool):
+                try:
+                    v = float(v)
+                except (TypeError, ValueError):
+                    raise ValueError(f"task {self.name}: parameter {k} must be a number, got {v!r}") from None
+                if not math.isfinite(v):
+                    raise ValueError(f"task {self.name}: parameter {k} must be finite, got {v!r}")
+            self.p[k] = v
+        if not 0 < float(self.p.get("seconds", 1.0)) <= 120:
+            raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
+        self.validate()
+        self.fig: Figure = load_figure(self.figure)
+
+    # ---- things a task may override -------------------------------------
+    def validate(self) -> None:
+        """Check parameter values; raise ValueError with one clear line."""
+
+    def scene(self) -> Scene:
+        return make_scene()
+
+    def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.fig.q_default.copy(), np.zeros(self.fig.nq)
+
+    def measure(self, traj) -> dict[str, np.ndarray]:
+        """Raw value of every term, each an array over episodes."""
+        raise NotImplementedError
+
+    def success(self, traj, measures: dict[str, np.ndarray]) -> np.ndarray:
+        """Which episodes solve the task (bool per episode)."""
+        return np.zeros(traj.n_episodes, dtype=bool)
+
+    def describe(self, traj, measures) -> list[str]:
+        """Short human-readable facts about one episode (gait, hits...)."""
+        return []
+
+    # ---- the harness uses these ------------------------------------------
+    @property
+    def seconds(self) -> float:
+        return float(self.p["seconds"])
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.seconds / self.dt))
+
+    def terminal_names(self) -> list[str]:
+        names = list(self.terminals) if self.terminals is not None else list(self.fig.sense_names)
+        for n in names:
+            self.fig.sense_index(n)        # raises on an unknown sense
+        return names
+
+    def score(self, traj, progress: float = 1.0):
+        """(total cost per episode, {term: value}, success per episode)."""
+        measures = self.measure(traj)
+        total = np.zeros(traj.n_episodes)
+        for term in self.terms:
+            v = np.asarray(measures[term.name], dtype=np.float64)
+            total += term.weight * term.factor(progress) * np.nan_to_num(v, nan=WORST, posinf=WORST)
+        bad = traj.diverged | ~np.isfinite(total)
+        total[bad] = WORST
+        total = np.minimum(total, WORST)
+        ok = self.success(traj, measures) & ~bad
+        return total, measures, ok
+
+    def breakdown(self, measures, e: int, progress: float = 1.0) -> list[dict]:
+        """Per-term rows for one episode: value, weight, phase factor, contribution."""
+        rows = []
+        for t in self.terms:
+            v = float(measures[t.name][e])
+            f = t.factor(progress)
+            rows.append(dict(term=t.name, value=v, weight=t.weight, phase=f,
+                             contribution=t.weight * f * v, main=t.main))
+        return rows
+
+    def config(self) -> dict:
+        return {"task": self.name, "figure": self.figure, "params": dict(self.p),
+                "actuation": self.actuation,
+                "terms": [dict(name=t.name, weight=t.weight, phase=list(t.phase), main=t.main)
+                          for t in self.terms]}
+
+
+# ---- registry --------------------------------------------------------------
+_TASKS: dict[str, type[Task]] = {}
+_LOADED = False
+
+
+def register_task(cls: type[Task]) -> type[Task]:
+    """Class decorator: make a task available by ``cls.name``."""
+    import inspect
+    if not cls.name or not cls.figure:
+        raise ValueError(f"{cls.__qualname__}: a task needs 'name' and 'figure'")
+    if not cls.terms or not any(t.main for t in cls.terms):
+        raise ValueError(f"task {cls.name}: needs terms with one main=True term")
+    old = _TASKS.get(cls.name)
+    if old is not None and inspect.getsourcefile(old) != inspect.getsourcefile(cls):
+        raise ValueError(f"task {cls.name!r} defined twice: {inspect.getsourcefile(old)} "
+                         f"and {inspect.getsourcefile(cls)}")
+    _TASKS[cls.name] = cls
+    return cls
+
+
+def _load_builtin():
+    global _LOADED
+    if not _LOADED:
+        _LOADED = True
+        from . import plugins
+        plugins.import_package("gpmotion.tasks")
+
+
+def task_names() -> list[str]:
+    _load_builtin()
+    return sorted(_TASKS)
+
+
+def get_task(name: str, **params) -> Task:
+    _load_builtin()
+    if name not in _TASKS:
+        raise KeyError(f"unknown task {name!r}; known: {', '.join(sorted(_TASKS))}")
+    return _TASKS[name](**params)

@@ -1,0 +1,81 @@
+"""lamp_hop: the desk lamp hops to a target point (Gritz & Hahn).
+
+Main goal: distance from the base centre to the target at the end.  Style
+points, phased in once the lamp has learned to arrive: arrive early, stay
+put after arriving, never hit the head or fall over, end at the neutral pose.
+"""
+import numpy as np
+
+from gpmotion.model import make_scene
+from gpmotion.task import Task, Term, register_task
+
+ARRIVED = 0.05          # m: "at the target"
+
+
+def hop_measures(task, traj):
+    """The lamp_hop terms (lamp_limbo adds the pole)."""
+    fig = traj.figure
+    base = traj.site("base_centre")                       # [E, F, 2]
+    goal = np.array([task.p["distance"], 0.0])
+    d = np.linalg.norm(base - goal, axis=-1)             # [E, F]
+    at = d < ARRIVED
+    first = np.where(at.any(axis=1), at.argmax(axis=1), d.shape[1] - 1)
+    late = traj.times[first] / task.seconds              # 1 when it never arrives
+    after = np.arange(d.shape[1])[None, :] >= first[:, None]
+    speed = np.linalg.norm(traj.com[..., 2:4], axis=-1)
+    moving = np.where(after, speed, 0.0).sum(axis=1) / np.maximum(after.sum(axis=1), 1)
+    heads = [fig.contact_names.index(c) for c in ("head_tip", "head_rim")]
+    head_force = traj.contact_force[..., heads].max(axis=(1, 2))
+    pitch = traj.base()[..., 0]
+    fell = np.abs(pitch).max(axis=1) > 1.0
+    act = fig.model.act_dof
+    neutral = np.abs(traj.q[:, -1, act] - fig.model.neutral).mean(axis=1)
+    return {"distance": d[:, -1], "late": late, "moving": moving,
+            "head_hit": (head_force > 0).astype(float) + head_force / (fig.total_mass * 9.81),
+            "fell": fell.astype(float), "neutral": neutral,
+            "energy": traj.energy.sum(axis=1)}
+
+
+HOP_TERMS = (
+    Term("distance", 1.0, main=True, doc="m from the base centre to the target at the end"),
+    Term("late", 0.1, phase=(0.2, 0.5), doc="arrival time / episode (1: never)"),
+    Term("moving", 0.1, phase=(0.3, 0.6), doc="mean speed of the com after arriving (m/s)"),
+    Term("head_hit", 0.3, phase=(0.2, 0.5), doc="head touched the ground (+ peak force / weight)"),
+    Term("fell", 0.5, phase=(0.1, 0.4), doc="base pitched beyond 1 rad"),
+    Term("neutral", 0.05, phase=(0.5, 0.8), doc="mean |joint − neutral| at the end (rad)"),
+    Term("energy", 0.0, doc="actuator work (J); weight 0 by default, for reports"),
+)
+
+
+@register_task
+class LampHop(Task):
+    name = "lamp_hop"
+    figure = "lamp"
+    description = "the lamp hops to a target point on the floor"
+    params = {"distance": 0.4, "seconds": 3.0}
+    terms = HOP_TERMS
+    success_threshold = "base within 5 cm of the target at the end, not fallen"
+
+    def validate(self):
+        if not 0.05 <= abs(self.p["distance"]) <= 5.0:
+            raise ValueError(f"lamp_hop: distance must be within 0.05..5 m, got {self.p['distance']}")
+
+    def scene(self):
+        return make_scene(goal=(self.p["distance"], 0.0))
+
+    def measure(self, traj):
+        return hop_measures(self, traj)
+
+    def success(self, traj, m):
+        return (m["distance"] < ARRIVED) & (m["fell"] == 0)
+
+    def describe(self, traj, m):
+        return [f"hops: {count_hops(traj)}", f"final distance {m['distance'][0] * 100:.1f} cm"]
+
+
+def count_hops(traj, e=0):
+    """Flight phases of episode e: frames with no base contact, after touching."""
+    fig = traj.figure
+    base = [fig.contact_names.index(c) for c in ("base_back", "base_front")]
+    air = traj.contact_force[e][:, base].max(axis=1) == 0
+    return int(np.sum(air[1:] & ~air[:-1]))

@@ -1,0 +1,48 @@
+"""lamp_limbo: hop to the target under a horizontal pole (Gritz & Hahn).
+
+As lamp_hop, with a pole halfway between start and target and a large
+penalty for touching it.  Pole height (of its lowest point) is a parameter;
+``gpmotion run lamp_limbo --param pole_height=0.30,0.35,0.40`` runs a series.
+"""
+import numpy as np
+
+from gpmotion.model import make_scene
+from gpmotion.task import Task, Term, register_task
+from gpmotion.tasks.lamp_hop import ARRIVED, HOP_TERMS, count_hops, hop_measures
+
+POLE_RADIUS = 0.01
+
+
+@register_task
+class LampLimbo(Task):
+    name = "lamp_limbo"
+    figure = "lamp"
+    description = "the lamp hops to a target, passing under a limbo pole"
+    params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.36}
+    terms = HOP_TERMS + (
+        Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
+    )
+    success_threshold = "base within 5 cm of the target, pole untouched, not fallen"
+
+    def validate(self):
+        if not 0.1 <= self.p["distance"] <= 5.0:
+            raise ValueError(f"lamp_limbo: distance must be within 0.1..5 m, got {self.p['distance']}")
+        if not 0.1 <= self.p["pole_height"] <= 1.0:
+            raise ValueError(f"lamp_limbo: pole_height must be within 0.1..1 m, got {self.p['pole_height']}")
+
+    def scene(self):
+        pole = (self.p["distance"] / 2, self.p["pole_height"] + POLE_RADIUS, POLE_RADIUS)
+        return make_scene(goal=(self.p["distance"], 0.0), poles=[pole])
+
+    def measure(self, traj):
+        m = hop_measures(self, traj)
+        pen = traj.pole_hit.max(axis=1)
+        m["pole"] = (pen > 0).astype(float) + 100.0 * pen
+        return m
+
+    def success(self, traj, m):
+        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0)
+
+    def describe(self, traj, m):
+        return [f"hops: {count_hops(traj)}", f"pole {'touched' if m['pole'][0] else 'clear'}",
+                f"final distance {m['distance'][0] * 100:.1f} cm"]
