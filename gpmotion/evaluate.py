@@ -1,0 +1,102 @@
+"""One evaluation interface, ``evaluate(genomes) -> Evaluation``, for every search.
+
+In-process evaluation runs the whole batch in one numba rollout over all
+threads.  Other backends (process pool, Dask) split genomes into chunks and
+call :func:`evaluate_chunk` remotely with plain data only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .families import Family, make_family
+from .sim.rollout import rollout
+from .task import Task, get_task
+
+
+@dataclass
+class Evaluation:
+    """Scores of a batch: costs (lower is better) and why."""
+    costs: np.ndarray                    # float64[n]
+    success: np.ndarray                  # bool[n]
+    failed: np.ndarray                   # bool[n] diverged simulations
+    measures: dict[str, np.ndarray]      # raw term values [n]
+    extras: list | None = None           # per-genome normalized sense trajectories (BSR)
+
+    @staticmethod
+    def concat(parts: list["Evaluation"]) -> "Evaluation":
+        extras = None if any(p.extras is None for p in parts) else [x for p in parts for x in p.extras]
+        return Evaluation(np.concatenate([p.costs for p in parts]),
+                          np.concatenate([p.success for p in parts]),
+                          np.concatenate([p.failed for p in parts]),
+                          {k: np.concatenate([p.measures[k] for p in parts]) for k in parts[0].measures},
+                          extras)
+
+
+@dataclass
+class InProcessEvaluator:
+    """Batched numba rollout over all threads of this process."""
+    task: Task
+    family: Family
+    actuation: str | None = None
+    threads: int | None = None
+    evaluations: int = field(default=0, init=False)
+
+    def __post_init__(self):
+        self.actuation = self.actuation or self.family.default_actuation
+        self._scene = self.task.scene()
+        self._q0, self._qd0 = self.task.initial_state()
+
+    def rollout(self, genomes, record_senses=False):
+        batch = self.family.encode(genomes)
+        return rollout(self.task.fig, self._scene, batch, n_steps=self.task.n_steps,
+                       q0=self._q0, qd0=self._qd0, dt=self.task.dt,
+                       record_every=self.task.record_every, actuation=self.actuation,
+                       record_senses=record_senses or self.family.needs_senses,
+                       threads=self.threads)
+
+    def evaluate(self, genomes, progress: float = 1.0) -> Evaluation:
+        genomes = list(genomes)
+        if not genomes:
+            return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
+        traj = self.rollout(genomes)
+        costs, measures, ok = self.task.score(traj, progress)
+        extras = None
+        if self.family.needs_senses:
+            extras = [self.family.normalized(traj.senses[e]) for e in range(len(genomes))]
+        self.evaluations += len(genomes)
+        return Evaluation(costs, ok, traj.diverged.copy(), measures, extras)
+
+    def close(self):
+        pass
+
+
+def spec_of(task: Task, family: Family, actuation: str, plugins=()) -> dict:
+    """Plain-data description a remote worker rebuilds the evaluator from."""
+    return {"task": task.name, "params": dict(task.p), "family": family.name,
+            "options": dict(family.options), "actuation": actuation, "plugins": list(plugins)}
+
+
+_WORKER_CACHE: dict[str, InProcessEvaluator] = {}
+
+
+def evaluator_from_spec(spec: dict, threads: int | None = None) -> InProcessEvaluator:
+    import json
+    key = json.dumps(spec, sort_keys=True)
+    ev = _WORKER_CACHE.get(key)
+    if ev is None:
+        from .plugins import load_folder
+        for folder in spec.get("plugins", ()):
+            load_folder(folder)
+        task = get_task(spec["task"], **spec["params"])
+        fam = make_family(spec["family"], task, **spec["options"])
+        ev = _WORKER_CACHE[key] = InProcessEvaluator(task, fam, spec["actuation"], threads)
+    return ev
+
+
+def evaluate_chunk(spec: dict, genomes_json: list, progress: float, threads: int | None = 1) -> Evaluation:
+    """Evaluate a chunk of JSON genomes in this (worker) process."""
+    ev = evaluator_from_spec(spec, threads)
+    genomes = [ev.family.from_json(g) for g in genomes_json]
+    return ev.evaluate(genomes, progress)

@@ -1,0 +1,147 @@
+"""Controller families on one harness: GP trees and BSR rule tables.
+
+A family turns plain-data genomes into a ControllerBatch for a task, draws
+random genomes, and reads/writes its genomes as safe JSON.  Everything a
+search or an evaluator needs to know about a controller type is here.
+"""
+from __future__ import annotations
+
+import numpy as np
+from deap import gp
+
+from .bsr import genome as bsr_genome
+from .bsr import mutation as bsr_mutation
+from .gp import bytecode
+from .gp.pset import build_pset
+from .task import Task
+
+MAX_TREES = 64
+
+
+class Family:
+    name = ""
+    default_actuation = "pd"
+    needs_senses = False          # evaluator records normalized senses for extras
+
+    def __init__(self, task: Task, **options):
+        self.task = task
+        self.options = options
+
+    def encode(self, genomes):
+        raise NotImplementedError
+
+    def to_json(self, genome):
+        raise NotImplementedError
+
+    def from_json(self, data):
+        raise NotImplementedError
+
+    def config(self) -> dict:
+        return {"family": self.name, **self.options}
+
+
+class GPFamily(Family):
+    """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
+    name = "gp"
+
+    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), **options):
+        super().__init__(task, primitives=list(primitives) if primitives else None,
+                         erc_range=list(erc_range), **options)
+        self.info = build_pset(task.terminal_names(), primitives,
+                               sense_names=task.fig.sense_names, erc_range=tuple(erc_range))
+        self.actuators = list(range(task.fig.n_act))
+
+    @property
+    def pset(self):
+        return self.info.pset
+
+    def encode(self, genomes):
+        return bytecode.encode_batch(list(genomes), self.info, self.actuators)
+
+    def to_json(self, genome):
+        return {"kind": "gp", "pset": self.info.hash,
+                "trees": [bytecode.tree_to_tokens(t) if isinstance(t, gp.PrimitiveTree) else list(t)
+                          for t in genome]}
+
+    def from_json(self, data):
+        if not isinstance(data, dict) or data.get("kind") != "gp" or not isinstance(data.get("trees"), list):
+            raise ValueError("not a GP controller (expected kind 'gp' with a list of trees)")
+        trees = data["trees"]
+        if len(trees) != len(self.actuators):
+            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure} has "
+                             f"{len(self.actuators)} actuated joints")
+        for t in trees:                       # validate: whitelist, size and depth caps
+            bytecode.tokens_to_tree(t, self.info)
+        return [list(t) for t in trees]
+
+
+class BSRFamily(Family):
+    """Auslander et al.'s sense- or time-based stimulus-response controllers."""
+    default_actuation = "kinematic"
+    kind = ""
+
+    def __init__(self, task: Task, rules=None, bsr_dt=0.01, **options):
+        super().__init__(task, rules=rules, bsr_dt=bsr_dt, **options)
+        self.limits = task.fig.actuator_limits()
+        if not np.all(np.isfinite(self.limits)):
+            raise ValueError(f"BSR needs finite joint limits on every actuator of {task.figure}")
+        self.bsr_dt = float(bsr_dt)
+
+    def encode(self, genomes):
+        return bsr_genome.encode_batch(list(genomes), self.sense_indices, self.task.fig.n_act)
+
+    def to_json(self, genome):
+        return genome.to_dict()
+
+    def from_json(self, data):
+        g = bsr_genome.genome_from_dict(data)
+        if g.kind != self.kind or g.n_act != self.task.fig.n_act:
+            raise ValueError(f"controller is a {g.kind}-based BSR for {g.n_act} joints; "
+                             f"expected {self.kind}-based for {self.task.fig.n_act}")
+        return g
+
+    def mutate(self, genome, rng, extra=None):
+        return bsr_mutation.mutate(genome, rng, extra)
+
+
+class BSRSenseFamily(BSRFamily):
+    name = "bsr-sense"
+    kind = "sense"
+    needs_senses = True
+
+    def __init__(self, task, rules=None, **options):
+        super().__init__(task, rules=rules or 8, **options)
+        self.sense_indices = bsr_genome.table1_sense_indices(task.fig.sense_names)
+
+    def random(self, rng):
+        return bsr_genome.random_sense_genome(rng, self.options["rules"], len(self.sense_indices),
+                                              self.limits, self.bsr_dt, self.task.seconds)
+
+    def normalized(self, senses):
+        m = self.task.fig.model
+        return bsr_mutation.normalized_sense_trajectory(senses, m.sense_lo, m.sense_hi,
+                                                        self.sense_indices)
+
+
+class BSRTimeFamily(BSRFamily):
+    name = "bsr-time"
+    kind = "time"
+
+    def __init__(self, task, rules=None, t_per=None, **options):
+        super().__init__(task, rules=rules or 4, t_per=t_per or task.seconds, **options)
+        self.sense_indices = None
+        if not 0 < float(self.options["t_per"]) <= 1e3:
+            raise ValueError(f"t_per must be in (0, 1000] s, got {t_per}")
+
+    def random(self, rng):
+        return bsr_genome.random_time_genome(rng, self.options["rules"], self.limits, self.bsr_dt,
+                                             self.task.seconds, float(self.options["t_per"]))
+
+
+FAMILIES = {f.name: f for f in (GPFamily, BSRSenseFamily, BSRTimeFamily)}
+
+
+def make_family(name: str, task: Task, **options) -> Family:
+    if name not in FAMILIES:
+        raise ValueError(f"unknown controller family {name!r}; known: {', '.join(FAMILIES)}")
+    return FAMILIES[name](task, **{k: v for k, v in options.items() if v is not None})
