@@ -1,8 +1,47 @@
 """gpmotion: evolve controllers for physically simulated articulated figures."""
+import importlib.util as _ilu
+import sys as _sys
+from pathlib import Path as _Path
+
+
+def _mount_plugin_packages():
+    """Installed, ``primitives/`` and ``tasks/`` are gpmotion.primitives and
+    gpmotion.tasks (setuptools package-dir).  Imported straight from a source
+    checkout (``python -m pytest`` puts the repo first on sys.path), they sit
+    beside this folder instead: mount them under the same names."""
+    here = _Path(__file__).resolve().parent
+    for sub in ("primitives", "tasks"):
+        name = f"{__name__}.{sub}"
+        init = here.parent / sub / "__init__.py"
+        if name in _sys.modules or (here / sub).exists() or not init.exists():
+            continue
+        if _ilu.find_spec(name) is not None:        # an editable install's finder
+            continue
+        spec = _ilu.spec_from_file_location(name, init, submodule_search_locations=[str(init.parent)])
+        module = _ilu.module_from_spec(spec)
+        _sys.modules[name] = module
+        spec.loader.exec_module(module)
+
+
+_mount_plugin_packages()
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
 from .model import Figure, Model, Scene, make_scene
 from .sim.rollout import Trajectory, rollout, simulate
+from .task import Task, Term, get_task, register_task, task_names
+
+
+def check_primitive(*args, **kw):
+    """Public contract check of a GP primitive (see gpmotion.check)."""
+    from .check import check_primitive as f
+    return f(*args, **kw)
+
+
+def check_task(*args, **kw):
+    """Public contract check of a task (see gpmotion.check)."""
+    from .check import check_task as f
+    return f(*args, **kw)
 
 __version__ = "0.1.0"
-__all__ = ["Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec", "figure_names",
+__all__ = ["Task", "Term", "check_primitive", "check_task", "get_task", "register_task", "task_names",
+           "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec", "figure_names",
            "load_figure", "make_scene", "register_figure", "rollout", "simulate"]

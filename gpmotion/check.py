@@ -104,6 +104,65 @@ def check_primitive(name_or_prim, *, n_random: int = 300, seed: int = 0) -> None
 
 
 # --------------------------------------------------------------------------
-# check_task: to be added by the lead (task contract: builds, rolls out,
-# scores finite, deterministic for a seed).  Intentionally not implemented here.
+# check_task: the task contract (builds, rolls out, scores finite, deterministic)
 # --------------------------------------------------------------------------
+
+def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | None = 0.5) -> None:
+    """Run the public task contract on a task name, class or instance.
+
+    Builds the task (short episodes by default, to keep it quick), checks its
+    terminals are senses of its figure, rolls out random GP controllers and the
+    neutral pose, and checks every term is a finite number per episode, the
+    total is finite, success is a bool per episode, and two evaluations of the
+    same genomes agree exactly.  Raises AssertionError naming the problem.
+    """
+    import random
+
+    from deap import gp as dgp
+
+    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.families import make_family
+    from gpmotion.task import Task, get_task
+
+    name = getattr(task, "name", task)
+    try:
+        if isinstance(task, Task):
+            t = task
+        elif isinstance(task, type):
+            t = task(**({"seconds": seconds} if seconds and "seconds" in task.params else {}))
+        else:
+            t = get_task(task, **({"seconds": seconds} if seconds else {}))
+        fam = make_family("gp", t)
+    except Exception as e:  # noqa: BLE001 - report any failure as a contract failure
+        raise AssertionError(f"task {name}: does not build: {e}") from e
+    term_names = [x.name for x in t.terms]
+    if len(set(term_names)) != len(term_names):
+        raise AssertionError(f"task {name}: repeated term names {term_names}")
+    state = random.getstate()
+    random.seed(seed)
+    try:
+        genomes = [[dgp.PrimitiveTree(dgp.genHalfAndHalf(fam.pset, 1, 4)) for _ in range(t.fig.n_act)]
+                   for _ in range(n_controllers)]
+    finally:
+        random.setstate(state)
+    ev = InProcessEvaluator(t, fam)
+    a = ev.evaluate(genomes, 1.0)
+    b = ev.evaluate(genomes, 1.0)
+    for term in term_names:
+        v = np.asarray(a.measures.get(term))
+        if v.shape != (n_controllers,):
+            raise AssertionError(f"task {name}: term {term!r} has shape {v.shape}, want ({n_controllers},)")
+        if not np.all(np.isfinite(v)):
+            raise AssertionError(f"task {name}: term {term!r} is not finite: {v}")
+    if not np.all(np.isfinite(a.costs)):
+        raise AssertionError(f"task {name}: non-finite total cost {a.costs}")
+    if a.success.dtype != bool or a.success.shape != (n_controllers,):
+        raise AssertionError(f"task {name}: success must be a bool per episode")
+    if not (np.array_equal(a.costs, b.costs) and np.array_equal(a.success, b.success)):
+        raise AssertionError(f"task {name}: two evaluations of the same controllers differ")
+    for progress in (0.0, 0.5, 1.0):
+        for term in t.terms:
+            f = term.factor(progress)
+            if not 0.0 <= f <= 1.0:
+                raise AssertionError(f"task {name}: phase factor of {term.name} is {f} at {progress}")
+    return None

@@ -1,0 +1,227 @@
+"""Simulator throughput benchmark: ``gpmotion bench [--figure lamp] [--json] [--quick]``.
+
+The workload is the one a search runs: a batch of controlled episodes of a
+figure on the ground, targets changing every step.  Each episode drives every
+actuated joint with ``offset + amplitude·sin(ω t + φ)`` (the ``schedule.sines``
+controller) with its own random frequencies, so the figure moves, lands and
+hops: the contact code is exercised, not skipped.
+
+Reported (one JSON object with ``--json``):
+
+* ``steps_per_s`` — controlled simulation steps per second on ONE thread
+  (best of ``repeats`` timed runs after a warm-up compile);
+* ``steps_per_s_all_threads`` and ``threads`` — the same batch on every
+  numba thread;
+* ``warm_start_s`` — wall time of a fresh ``python`` process that imports
+  gpmotion and runs a tiny rollout with the kernel cache warm (interpreter
+  start-up included; ``warm_start_inner_s`` excludes it);
+* ``gp_evals_per_s`` — random GP controllers on ``lamp_hop`` scored through
+  the in-process evaluator (episodes per second, all threads), and
+  ``gp_steps_per_s`` the simulated steps per second that implies;
+* ``contact_frames`` / ``airborne_frames`` — fractions of recorded frames with
+  some / no ground contact, proof that the workload touches the ground;
+* versions, cpu count, figure, episodes, steps.
+
+Timings are wall clock on a shared machine: compare ratios within one run.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+QUICK = dict(seconds=0.5, episodes=8, repeats=2, gp_population=8)
+FULL = dict(seconds=2.0, episodes=64, repeats=3, gp_population=64)
+
+_WARM_SNIPPET = """
+import time
+t0 = time.perf_counter()
+import gpmotion
+tr = gpmotion.simulate({figure!r}, 0.05)
+assert not tr.diverged[0]
+print(time.perf_counter() - t0)
+"""
+
+
+def sine_workload(fig, episodes: int, seed: int = 0):
+    """Per-episode random sines around the neutral pose (amplitudes big enough to hop).
+
+    Returns ``(offset, amplitude, omega, phase)``, each ``[episodes, n_act]``.
+    """
+    rng = np.random.default_rng(seed)
+    na = fig.n_act
+    lim = fig.actuator_limits()
+    span = np.where(np.isfinite(lim[:, 1] - lim[:, 0]), lim[:, 1] - lim[:, 0], 2.0)
+    offset = fig.model.neutral + rng.uniform(-0.1, 0.1, (episodes, na)) * span
+    amplitude = rng.uniform(0.2, 0.4, (episodes, na)) * span
+    omega = rng.uniform(4.0, 14.0, (episodes, na))
+    phase = rng.uniform(0.0, 2 * np.pi, (episodes, na))
+    return offset, amplitude, omega, phase
+
+
+def _best_time(fn, repeats: int) -> float:
+    best = np.inf
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def _warm_start(figure: str, runs: int = 2) -> tuple[float, float]:
+    """(wall, in-process) seconds of a fresh interpreter; the first run warms the cache."""
+    code = _WARM_SNIPPET.format(figure=figure)
+    walls, inner = [], []
+    for _ in range(runs + 1):
+        t0 = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env=dict(os.environ), timeout=600)
+        wall = time.perf_counter() - t0
+        if out.returncode != 0:
+            raise RuntimeError(f"warm-start subprocess failed: {out.stderr.strip()[-500:]}")
+        walls.append(wall)
+        inner.append(float(out.stdout.strip().splitlines()[-1]))
+    return min(walls[1:]), min(inner[1:])
+
+
+def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dict:
+    """Random GP controllers (ramped half-and-half, depth 2..6) on lamp_hop."""
+    import random
+
+    from deap import gp
+
+    from .evaluate import InProcessEvaluator
+    from .families import make_family
+    from .task import get_task
+
+    task = get_task("lamp_hop")
+    fam = make_family("gp", task)
+    random.seed(seed)
+    genomes = [[gp.PrimitiveTree(gp.genHalfAndHalf(fam.pset, 2, 6)) for _ in fam.actuators]
+               for _ in range(population)]
+    ev = InProcessEvaluator(task, fam, threads=threads)
+    ev.evaluate(genomes[:2])                      # compile / load the interpreter and kernel
+    t = _best_time(lambda: ev.evaluate(genomes), repeats)
+    return {"gp_evals_per_s": population / t, "gp_steps_per_s": population * task.n_steps / t,
+            "gp_population": population, "gp_task": task.name, "gp_steps": task.n_steps}
+
+
+def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int | None = None,
+              threads: int | None = None, *, quick: bool = False, repeats: int | None = None,
+              gp: bool = True, warm_start: bool = True, seed: int = 0) -> dict:
+    """Measure simulator throughput; returns a JSON-able dict (see the module doc)."""
+    import numba
+
+    import gpmotion
+    from gpmotion.controllers import schedule
+
+    cfg = dict(QUICK if quick else FULL)
+    seconds = float(seconds if seconds is not None else cfg["seconds"])
+    episodes = int(episodes if episodes is not None else cfg["episodes"])
+    repeats = int(repeats if repeats is not None else cfg["repeats"])
+    max_threads = numba.config.NUMBA_NUM_THREADS
+    threads = int(min(threads or max_threads, max_threads))
+
+    fig = gpmotion.load_figure(figure)
+    scene = gpmotion.make_scene()
+    ctrl = schedule.sines(*sine_workload(fig, episodes, seed))
+    dt = 1e-3
+    n_steps = int(round(seconds / dt))
+
+    def run(th):
+        return gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, dt=dt, threads=th)
+
+    t0 = time.perf_counter()
+    tr = run(1)                                    # compiles, or loads the cache
+    first_call_s = time.perf_counter() - t0
+    steps = episodes * (tr.q.shape[1] - 1) * tr.record_every
+    t1 = _best_time(lambda: run(1), repeats)
+    tn = _best_time(lambda: run(threads), repeats)
+    touching = tr.contact_force.sum(axis=-1) > 0
+    result = {
+        "figure": fig.name,
+        "episodes": episodes,
+        "steps": steps,
+        "steps_per_episode": steps // episodes,
+        "dt": dt,
+        "steps_per_s": steps / t1,
+        "steps_per_s_all_threads": steps / tn,
+        "threads": threads,
+        "seconds_one_thread": t1,
+        "seconds_all_threads": tn,
+        "first_call_s": first_call_s,
+        "diverged": int(tr.diverged.sum()),
+        "contact_frames": float(touching.mean()),
+        "airborne_frames": float((~touching).mean()),
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "python": platform.python_version(),
+        "cpu_count": os.cpu_count(),
+        "machine": platform.machine(),
+        "quick": bool(quick),
+    }
+    if warm_start:
+        result["warm_start_s"], result["warm_start_inner_s"] = _warm_start(fig.name)
+    if gp and fig.name == "lamp":
+        result.update(_gp_bench(cfg["gp_population"], threads, repeats, seed))
+    return result
+
+
+def format_report(r: dict) -> str:
+    lines = [f"gpmotion bench — figure {r['figure']}, {r['episodes']} episodes × "
+             f"{r['steps_per_episode']} steps (dt {r['dt'] * 1e3:g} ms), sine targets every step",
+             f"  one thread        {r['steps_per_s'] / 1e6:8.3f} M steps/s",
+             f"  {r['threads']} threads{' ' * (9 - len(str(r['threads'])))}"
+             f"{r['steps_per_s_all_threads'] / 1e6:8.3f} M steps/s",
+             f"  ground contact in {100 * r['contact_frames']:.0f}% of frames, airborne "
+             f"{100 * r['airborne_frames']:.0f}%, diverged episodes {r['diverged']}"]
+    if "warm_start_s" in r:
+        lines.append(f"  warm start        {r['warm_start_s']:8.3f} s  (import + tiny rollout in a "
+                     f"fresh process; {r['warm_start_inner_s']:.3f} s after interpreter start)")
+    if "gp_evals_per_s" in r:
+        lines.append(f"  GP on {r['gp_task']}    {r['gp_evals_per_s']:8.1f} evaluations/s "
+                     f"({r['gp_steps_per_s'] / 1e6:.3f} M steps/s, population {r['gp_population']})")
+    lines.append(f"  numba {r['numba']}, numpy {r['numpy']}, python {r['python']}, "
+                 f"{r['cpu_count']} cpus")
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gpmotion bench", description="simulator throughput benchmark")
+    p.add_argument("--figure", default="lamp", help="figure name (default: lamp)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--quick", action="store_true", help="CI-sized run (seconds, not minutes)")
+    p.add_argument("--seconds", type=float, default=None, help="simulated seconds per episode")
+    p.add_argument("--episodes", type=int, default=None, help="episodes per batch")
+    p.add_argument("--threads", type=int, default=None, help="threads for the all-threads run")
+    p.add_argument("--no-gp", action="store_true", help="skip the GP evaluation benchmark")
+    p.add_argument("--no-warm-start", action="store_true", help="skip the fresh-process timing")
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    from .figures import figure_names
+    if args.figure not in figure_names():
+        print(f"gpmotion bench: unknown figure {args.figure!r}; known: {', '.join(figure_names())}",
+              file=sys.stderr)
+        return 2
+    for name in ("seconds", "episodes", "threads"):
+        v = getattr(args, name)
+        if v is not None and not (np.isfinite(v) and v > 0):
+            print(f"gpmotion bench: --{name} must be > 0, got {v}", file=sys.stderr)
+            return 2
+    r = run_bench(args.figure, args.seconds, args.episodes, args.threads, quick=args.quick,
+                  gp=not args.no_gp, warm_start=not args.no_warm_start)
+    print(json.dumps(r, indent=2) if args.json else format_report(r))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

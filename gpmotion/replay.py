@@ -1,0 +1,43 @@
+"""Replay a controller: from a run directory or a controller JSON file."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .evaluate import InProcessEvaluator
+from .families import make_family
+from .records import FormatError, read_json
+from .task import get_task
+
+
+def replay_genome(task, family, actuation, genome):
+    """One episode of ``genome``: (trajectory, costs, measures, success)."""
+    ev = InProcessEvaluator(task, family, actuation)
+    traj = ev.rollout([genome], record_senses=True)
+    costs, measures, ok = task.score(traj, 1.0)
+    return traj, costs, measures, ok
+
+
+def load_controller(path: str | Path):
+    """(task, family, actuation, genome, record) from best.json or a run dir.
+
+    Parsed with a whitelist (primitive and terminal names, size caps); a file
+    never runs code.
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / "best.json"
+    rec = read_json(path, kind="best")
+    try:
+        if rec.get("plugins"):
+            from .plugins import load_folder
+            for folder in rec["plugins"]:
+                load_folder(folder)
+        task = get_task(str(rec["task"]), **dict(rec.get("params", {})))
+        family = make_family(str(rec["family"]), task, **dict(rec.get("options", {})))
+        genome = family.from_json(rec["genome"])
+        actuation = str(rec.get("actuation") or family.default_actuation)
+    except (KeyError, TypeError) as e:
+        raise FormatError(f"{path}: not a controller record ({e})") from None
+    except ValueError as e:
+        raise FormatError(f"{path}: {e}") from None
+    return task, family, actuation, genome, rec

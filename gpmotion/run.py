@@ -1,0 +1,233 @@
+"""The run loop: search ⇄ evaluator, with a log row and an atomic checkpoint
+after every generation, so a killed run resumes to exactly the same result.
+"""
+from __future__ import annotations
+
+import platform
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .evaluate import Evaluation, spec_of
+from .families import make_family
+from .records import RunDir, validate_number
+from .search.adapters import make_search
+from .task import Task, get_task
+
+
+@dataclass
+class RunConfig:
+    """Everything that fixes a run (written to config.json)."""
+    task: str
+    family: str = "gp"
+    seed: int = 0
+    params: dict = field(default_factory=dict)          # task parameters
+    family_options: dict = field(default_factory=dict)  # rules, t_per, primitives...
+    search: dict = field(default_factory=dict)          # population, generations...
+    actuation: str | None = None
+    workers: int = 0
+    scheduler: str | None = None
+    threads: int | None = None
+    plugins: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return dict(task=self.task, family=self.family, seed=self.seed, params=self.params,
+                    family_options=self.family_options, search=self.search,
+                    actuation=self.actuation, workers=self.workers, scheduler=self.scheduler,
+                    threads=self.threads, plugins=self.plugins)
+
+    @classmethod
+    def from_json(cls, d: dict) -> "RunConfig":
+        keys = cls.__dataclass_fields__
+        missing = [k for k in ("task", "family", "seed") if k not in d]
+        if missing:
+            raise ValueError(f"config.json lacks {missing}")
+        return cls(**{k: d[k] for k in keys if k in d})
+
+
+def build(cfg: RunConfig):
+    """Task, family and search (not yet the evaluator) from a config."""
+    validate_number("--seed", cfg.seed, lo=0, integer=True)
+    if cfg.plugins:
+        from .plugins import load_folder
+        for folder in cfg.plugins:
+            load_folder(folder)
+    task = get_task(cfg.task, **cfg.params)
+    family = make_family(cfg.family, task, **cfg.family_options)
+    search = make_search(family, cfg.seed, **cfg.search)
+    actuation = cfg.actuation or family.default_actuation
+    return task, family, search, actuation
+
+
+def _evaluator(cfg, task, family, actuation):
+    from .evaluators import make_evaluator
+    return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
+                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins)
+
+
+class Progress:
+    """One line per generation on stderr: best, median, success, speed, ETA."""
+
+    def __init__(self, total: int, quiet: bool = False):
+        self.total, self.quiet, self.t0 = total, quiet, time.perf_counter()
+        self.evals = 0
+
+    def update(self, gen: int, ev: Evaluation, best: float):
+        self.evals += len(ev.costs)
+        if self.quiet:
+            return
+        el = time.perf_counter() - self.t0
+        rate = self.evals / el if el > 0 else 0.0
+        eta = el / max(gen, 1) * (self.total - gen)
+        print(f"gen {gen:>4}/{self.total}  best {best:.4f}  median {np.median(ev.costs):.4f}  "
+              f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
+              f"{rate:,.0f} evals/s  eta {eta:,.0f}s", file=sys.stderr, flush=True)
+
+
+def _log_row(search, ev: Evaluation, evals_total: int, elapsed: float) -> dict:
+    c = ev.costs
+    return {"generation": search.generation, "evaluations": evals_total,
+            "progress": round(search.progress, 6), "best_so_far": search.best_cost,
+            "gen_min": float(c.min()), "gen_median": float(np.median(c)),
+            "gen_mean": float(c.mean()), "solved": int(ev.success.sum()),
+            "failed": int(ev.failed.sum()), "elapsed_s": round(elapsed, 3)}
+
+
+def _trim_log(run: RunDir, generation: int):
+    """On resume, drop log rows written after the checkpoint was taken."""
+    rows = run.read_log()
+    keep = [r for r in rows if int(r["generation"]) <= generation]
+    if len(keep) != len(rows) or (run.log_path.exists() and not rows):
+        from .records import atomic_write_text
+        import csv
+        import io
+        buf = io.StringIO()
+        if rows:
+            w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+            w.writeheader()
+            w.writerows(keep)
+        atomic_write_text(run.log_path, buf.getvalue())
+
+
+def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
+        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None):
+    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir)."""
+    if resume:
+        if not (Path(out) / RunDir.CONFIG).exists():
+            raise ValueError(f"{out}: no config.json to resume from")
+        rd = RunDir.create(out, resume=True)
+        cfg = RunConfig.from_json(rd.read_config()["run"])
+        task, family, search, actuation = build(cfg)
+    else:       # validate everything before touching the disk
+        task, family, search, actuation = build(cfg)
+        rd = RunDir.create(out, force=force)
+    evals = 0
+    elapsed0 = 0.0
+    if resume and rd.checkpoint_path.exists():
+        ck = rd.load_checkpoint()
+        search.load_state_dict(ck["search"])
+        evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
+        _trim_log(rd, search.generation)
+    elif not resume:
+        rd.write_config({"run": cfg.to_json(), "task_config": task.config(),
+                         "family_config": family.config(), "actuation": actuation,
+                         "versions": _versions(), "spec": spec_of(task, family, actuation, cfg.plugins)})
+    evaluator = _evaluator(cfg, task, family, actuation)
+    prog = Progress(search.total, quiet)
+    t0 = time.perf_counter() - elapsed0
+    stop = {"flag": False}
+
+    def on_sigint(signum, frame):            # finish this generation, checkpoint, exit
+        if stop["flag"]:
+            raise KeyboardInterrupt
+        stop["flag"] = True
+        print("\ninterrupt: finishing this generation and checkpointing (Ctrl-C again to abort)",
+              file=sys.stderr)
+
+    old = signal.signal(signal.SIGINT, on_sigint) if _main_thread() else None
+    done_now = 0
+    try:
+        while not search.done and not stop["flag"]:
+            if max_generations is not None and done_now >= max_generations:
+                break
+            genomes = search.ask()
+            ev = evaluator.evaluate(genomes, search.progress)
+            search.tell(ev)
+            evals += len(genomes)
+            done_now += 1
+            el = time.perf_counter() - t0
+            rd.log_row(_log_row(search, ev, evals, el))
+            rd.save_checkpoint({"search": search.state_dict(), "evaluations": evals,
+                                "elapsed_s": el})
+            prog.update(search.generation, ev, search.best_cost)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
+        evaluator.close()
+    if search.done:
+        write_best(rd, cfg, task, family, actuation, search)
+        if artifacts:
+            write_artifacts(rd, task, family, actuation, search.best)
+    return search.best, search.best_cost, rd
+
+
+def _main_thread():
+    import threading
+    return threading.current_thread() is threading.main_thread()
+
+
+def _versions():
+    import deap
+    import numba
+    return {"gpmotion": __version__, "python": platform.python_version(), "numpy": np.__version__,
+            "numba": numba.__version__, "deap": deap.__version__}
+
+
+def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cost) -> dict:
+    """The safe-JSON controller file (best.json, or a user's controller)."""
+    return {"task": task.name, "params": dict(task.p), "family": family.name,
+            "options": dict(family.options), "actuation": actuation, "plugins": list(cfg.plugins),
+            "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
+
+
+def write_best(rd: RunDir, cfg, task, family, actuation, search):
+    rec = controller_record(cfg, task, family, actuation, search.best, search.best_cost)
+    from .replay import replay_genome
+    traj, costs, measures, ok = replay_genome(task, family, actuation, search.best)
+    rec["terms"] = task.breakdown(measures, 0, 1.0)
+    rec["final_cost"] = float(costs[0])
+    rec["success"] = bool(ok[0])
+    rec["facts"] = task.describe(traj, measures)
+    rd.write_best(rec)
+
+
+def write_artifacts(rd: RunDir, task, family, actuation, genome):
+    from . import render
+    from .replay import replay_genome
+    traj, *_ = replay_genome(task, family, actuation, genome)
+    render_trajectory(traj, rd.artifact("filmstrip.png"), rd.artifact("motion.gif"),
+                      title=f"{task.name} ({family.name})")
+    rows = rd.read_log()
+    if rows:
+        x = [int(r["evaluations"]) for r in rows]
+        render.curve(rd.artifact("curve.png"), x, [float(r["best_so_far"]) for r in rows],
+                     median=[float(r["gen_median"]) for r in rows], xlabel="evaluations",
+                     title=f"{task.name} ({family.name})")
+
+
+def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0):
+    from . import render
+    seg = traj.segments()[e]
+    radii = traj.figure.model.seg_r
+    sc = traj.scene
+    kw = dict(poles=sc.poles if len(sc.poles) else None,
+              ground_z=sc.ground_z if sc.ground else None, goal=tuple(sc.goal), title=title)
+    if filmstrip:
+        render.filmstrip(filmstrip, seg, radii, traj.times, **kw)
+    if gif:
+        render.animate(gif, seg, radii, traj.times, **kw)

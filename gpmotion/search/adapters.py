@@ -1,0 +1,121 @@
+"""One face for every search the run loop drives (ask / tell / state).
+
+GP (generational, DEAP) and BSR's serial search differ in vocabulary; the
+run loop sees only: ``ask() -> genomes``, ``tell(evaluation)``, ``progress``
+(0..1, for phased style terms), ``done``, ``generation``, ``best``,
+``best_cost``, ``row()`` (a log.csv row) and a JSON-safe ``state_dict``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..evaluate import Evaluation
+from .serial import SerialSearch
+
+GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0.02,
+                   selection="tournament", tournament_size=5, elitism=2)
+SERIAL_DEFAULTS = dict(n_working=10, n_generations=4000, reseed_every=200)
+
+
+class GPAdapter:
+    kind = "gp"
+
+    def __init__(self, family, seed: int, **opts):
+        from .gp import GPSearch
+        self.family = family
+        self.search = GPSearch(family, seed=seed, **{**GP_DEFAULTS, **opts})
+        self.last: Evaluation | None = None
+
+    @property
+    def progress(self):
+        return self.search.progress
+
+    @property
+    def done(self):
+        return self.search.done
+
+    @property
+    def generation(self):
+        return self.search.generation
+
+    @property
+    def total(self):
+        return self.search.generations
+
+    def ask(self):
+        return self.search.ask()
+
+    def tell(self, ev: Evaluation):
+        self.last = ev
+        self.search.tell(ev.costs, ev)
+
+    @property
+    def best(self):
+        return self.search.best
+
+    @property
+    def best_cost(self):
+        return float(self.search.best_cost)
+
+    def state_dict(self):
+        return self.search.state_dict()
+
+    def load_state_dict(self, d):
+        self.search.load_state_dict(d)
+
+
+class SerialAdapter:
+    """Auslander's serial search minimizing task costs; a 'generation' is one
+    round of C mutants (C evaluations)."""
+    kind = "serial"
+
+    def __init__(self, family, seed: int, **opts):
+        opts = {**SERIAL_DEFAULTS, **opts}
+        self.family = family
+        self.search = SerialSearch(family.random, family.mutate, rng=np.random.default_rng(seed),
+                                   maximize=False, genome_to_json=family.to_json,
+                                   genome_from_json=family.from_json, **opts)
+
+    @property
+    def progress(self):
+        return min(1.0, self.search.generation / max(1, self.search.n_generations))
+
+    @property
+    def done(self):
+        return self.search.done
+
+    @property
+    def generation(self):
+        return self.search.generation
+
+    @property
+    def total(self):
+        return self.search.n_generations
+
+    def ask(self):
+        return self.search.ask()
+
+    def tell(self, ev: Evaluation):
+        self.search.tell(ev.costs, ev.extras)
+
+    @property
+    def best(self):
+        return self.search.best_genome
+
+    @property
+    def best_cost(self):
+        return float(self.search.best_score)
+
+    def state_dict(self):
+        return self.search.state_dict()
+
+    def load_state_dict(self, d):
+        self.search.load_state_dict(d)
+
+
+def make_search(family, seed: int, **opts):
+    """GP trees evolve with DEAP; BSR rule tables with the serial search."""
+    opts = {k: v for k, v in opts.items() if v is not None}
+    if family.name == "gp":
+        return GPAdapter(family, seed, **opts)
+    return SerialAdapter(family, seed, **opts)
