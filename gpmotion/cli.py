@@ -78,6 +78,19 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seconds", type=float, default=2.0)
     p.add_argument("-o", "--output", default="filmstrip.png")
     p.add_argument("--gif", help="also write a GIF")
+    p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
+    p.add_argument("task")
+    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time")
+    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("--budget", type=int, default=5000, help="evaluations per run (default 5000)")
+    p.add_argument("--actuation", choices=["pd", "kinematic"], default="pd",
+                   help="one actuation for every family (default pd)")
+    p.add_argument("--population", type=int, default=100, help="GP population (default 100)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE")
+    p.add_argument("--workers", type=int, default=0)
+    p.add_argument("--scheduler")
+    p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    p.add_argument("--quiet", action="store_true")
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
     p.add_argument("--plugins", action="append", default=[], metavar="DIR")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
@@ -241,6 +254,25 @@ def cmd_render(args):
     print(f"wrote {args.output}" + (f" and {args.gif}" if args.gif else ""))
 
 
+def cmd_compare(args):
+    from .compare import compare
+    from .families import FAMILIES
+    from .records import validate_number
+    ctrls = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    for c in ctrls:
+        if c not in FAMILIES:
+            raise ValueError(f"--controllers: unknown {c!r}; known: {', '.join(FAMILIES)}")
+    validate_number("--seeds", args.seeds, lo=1, hi=1000, integer=True)
+    validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
+    validate_number("--population", args.population, lo=2, hi=10**6, integer=True)
+    out = args.out or f"runs/compare-{args.task}"
+    rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
+                       params=_params(args.param), population=args.population,
+                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
+    print(md)
+    print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
+
+
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
@@ -268,7 +300,7 @@ def _report(label, fn, arg):
 
 
 COMMANDS = {"list": cmd_list, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
-            "render": cmd_render, "check": cmd_check}
+            "render": cmd_render, "check": cmd_check, "compare": cmd_compare}
 
 if __name__ == "__main__":
     sys.exit(main())

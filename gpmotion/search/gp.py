@@ -1,0 +1,358 @@
+"""Gritz & Hahn's genetic programming as an ask/tell object.
+
+An individual is a list of ``gp.PrimitiveTree``, one per actuator.  The
+search never simulates: ``ask()`` returns plain-data genomes (one token list
+per tree, what ``family.encode``/``to_json`` take and what crosses processes)
+to be evaluated at ``progress``; ``tell(costs)`` takes their costs (lower is
+better) and breeds the next generation.  Operators are in
+:mod:`gpmotion.gp.toolbox` (crossover between trees of the same DOF only,
+one random DOF per mating; ``mutUniform`` on one DOF; static depth/size
+limits; roulette on ``1/(1+cost)`` or tournament).  Each new individual is
+made by crossover with ``p_crossover``, mutation with ``p_mutation``, else
+reproduction (a copy); the best ``elitism`` pass unchanged.
+
+Decisions, stated once here:
+
+* **Costs and phases.**  A cost depends on ``progress`` only through the
+  task's style-term factors (``Term.factor``), so the *phase* of a generation
+  is that tuple of factors.  Every individual of every generation gets a cost
+  under its own generation's phase: copies (elites, reproduction, crossovers
+  that changed nothing) reuse their parent's cost only when the phase is
+  unchanged (``reuse_costs=True``; this relies on evaluation being
+  deterministic, which the task contract tests check), otherwise they are
+  re-evaluated.  Identical genomes within a generation are evaluated once.
+  So ``ask()`` returns the *unique, unknown* genomes only, and generation 0
+  the whole (deduplicated) population.
+* **Hall of fame across phases.**  Costs from different phases are not
+  comparable (style terms only add cost as they phase in).  ``best`` is
+  replaced by a generation's best when that cost is strictly lower *or* the
+  incumbent was scored under another phase; so once the phases stop changing
+  (progress past every term's ramp, and always in the last generation,
+  progress 1), ``best`` is the best ever under the full score.
+  ``generation_best`` keeps each generation's best with the cost it had then.
+* **Randomness.**  DEAP's operators (and the primitive set's ERC) draw from
+  the module-level :mod:`random`.  The search keeps its own state, seeded
+  from ``seed``: around each variation step it saves the caller's global
+  state, installs its own, and afterwards stores its advanced state and
+  puts the caller's back.  A search is therefore deterministic whatever other
+  code does with ``random``, and leaves it untouched (not thread-safe: do not
+  use ``random`` from another thread while ``tell`` runs).
+* ``generations`` = number of *bred* generations; generations 0..G are
+  evaluated, progress = generation / G (1 for G = 0), so the last generation
+  is scored with every style term fully on.
+"""
+from __future__ import annotations
+
+import contextlib
+import random
+
+import numpy as np
+from deap import gp
+
+from gpmotion.gp.bytecode import MAX_TREE_DEPTH, MAX_TREE_SIZE, tokens_to_tree, tree_to_tokens
+from gpmotion.gp.toolbox import (clean_costs, crossover_same_dof, make_tree_operators,
+                                 mutate_one_dof, random_tree, roulette_indices,
+                                 tournament_indices)
+from gpmotion.records import python_random_state_from_json, python_random_state_to_json
+from gpmotion.task import WORST
+
+STATE_FORMAT = "gp-search-v1"
+SELECTIONS = ("roulette", "tournament")
+
+
+def _is_int(x) -> bool:
+    return isinstance(x, (int, np.integer)) and not isinstance(x, bool)
+
+
+def genome_key(individual) -> tuple:
+    """Hashable identity of an individual: its trees' token tuples."""
+    return tuple(tuple(tree_to_tokens(t) if isinstance(t, gp.PrimitiveTree) else t)
+                 for t in individual)
+
+
+class GPSearch:
+    """Generational GP over one-tree-per-DOF individuals (Gritz & Hahn)."""
+
+    def __init__(self, family, population: int = 500, generations: int = 50,
+                 p_crossover: float = 0.9, p_mutation: float = 0.02,
+                 selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
+                 init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
+                 max_size: int = 200, seed: int | None = None, reuse_costs: bool = True):
+        self.family = family
+        self._configure(dict(population=population, generations=generations,
+                             p_crossover=p_crossover, p_mutation=p_mutation,
+                             selection=selection, tournament_size=tournament_size,
+                             elitism=elitism, init_depth=init_depth, max_depth=max_depth,
+                             max_size=max_size, seed=seed, reuse_costs=reuse_costs))
+        self._rstate = random.Random(self.seed).getstate()
+        self.generation = 0
+        self.evaluations = 0
+        self.costs: np.ndarray | None = None      # costs of the current population, once told
+        self._done = False
+        self._pending: list[tuple] | None = None
+        self._parents: dict[tuple, float] = {}    # last told generation: key -> cost
+        self._parents_phase: tuple | None = None
+        self._best_key, self.best_cost = None, float("inf")
+        self.best_generation, self._best_phase = -1, None
+        self.generation_best: list[dict] = []
+        self.history: list[dict] = []
+        with self._own_random():
+            self._set_population(self._initial_population())
+
+    # -- configuration -------------------------------------------------------
+    def _configure(self, c: dict) -> None:
+        def bad(what, value):
+            raise ValueError(f"GPSearch: {what}, got {value!r}")
+        if not _is_int(c["population"]) or c["population"] < 2:
+            bad("population must be an integer >= 2", c["population"])
+        if not _is_int(c["generations"]) or c["generations"] < 0:
+            bad("generations must be an integer >= 0", c["generations"])
+        for k in ("p_crossover", "p_mutation"):
+            if isinstance(c[k], bool) or not isinstance(c[k], (int, float)) or not 0 <= c[k] <= 1:
+                bad(f"{k} must be a number in [0, 1]", c[k])
+        if c["p_crossover"] + c["p_mutation"] > 1:
+            bad("p_crossover + p_mutation must be <= 1", c["p_crossover"] + c["p_mutation"])
+        if c["selection"] not in SELECTIONS:
+            bad(f"selection must be one of {SELECTIONS}", c["selection"])
+        if not _is_int(c["tournament_size"]) or c["tournament_size"] < 1:
+            bad("tournament_size must be an integer >= 1", c["tournament_size"])
+        if not _is_int(c["elitism"]) or not 0 <= c["elitism"] <= c["population"]:
+            bad("elitism must be an integer in [0, population]", c["elitism"])
+        if not _is_int(c["max_depth"]) or not 1 <= c["max_depth"] <= MAX_TREE_DEPTH:
+            bad(f"max_depth must be an integer in [1, {MAX_TREE_DEPTH}]", c["max_depth"])
+        if not _is_int(c["max_size"]) or not 1 <= c["max_size"] <= MAX_TREE_SIZE:
+            bad(f"max_size must be an integer in [1, {MAX_TREE_SIZE}]", c["max_size"])
+        d = c["init_depth"]
+        if (not isinstance(d, (tuple, list)) or len(d) != 2 or not all(map(_is_int, d))
+                or not 0 <= d[0] <= d[1] <= c["max_depth"]):
+            bad("init_depth must be (min, max) integers with 0 <= min <= max <= max_depth", d)
+        if not _is_int(c["seed"]):
+            bad("seed must be an integer (randomness is explicit)", c["seed"])
+        self.population_size, self.generations = int(c["population"]), int(c["generations"])
+        self.p_crossover, self.p_mutation = float(c["p_crossover"]), float(c["p_mutation"])
+        self.selection, self.tournament_size = c["selection"], int(c["tournament_size"])
+        self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
+        self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
+        self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
+        self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
+
+    def config(self) -> dict:
+        return {"population": self.population_size, "generations": self.generations,
+                "p_crossover": self.p_crossover, "p_mutation": self.p_mutation,
+                "selection": self.selection, "tournament_size": self.tournament_size,
+                "elitism": self.elitism, "init_depth": list(self.init_depth),
+                "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
+                "reuse_costs": self.reuse_costs}
+
+    # -- randomness ----------------------------------------------------------
+    @contextlib.contextmanager
+    def _own_random(self):
+        """Run DEAP's operators on this search's ``random`` state (module docstring)."""
+        outer = random.getstate()
+        random.setstate(self._rstate)
+        try:
+            yield
+        finally:
+            self._rstate = random.getstate()
+            random.setstate(outer)
+
+    # -- phases --------------------------------------------------------------
+    def progress_of(self, generation: int) -> float:
+        return 1.0 if self.generations == 0 else min(1.0, generation / self.generations)
+
+    @property
+    def progress(self) -> float:
+        """Run progress in [0, 1] of the current generation; pass it to the evaluator."""
+        return self.progress_of(self.generation)
+
+    def phase_of(self, generation: int) -> tuple:
+        """The style-term factors in force at ``generation`` (what a cost depends on)."""
+        p = self.progress_of(generation)
+        terms = getattr(getattr(self.family, "task", None), "terms", None)
+        return tuple(float(t.factor(p)) for t in terms) if terms else (p,)
+
+    def _cache_phase(self, generation: int) -> tuple:
+        return self.phase_of(generation) if self.reuse_costs else (float(generation),)
+
+    # -- population ----------------------------------------------------------
+    def _initial_population(self) -> list:
+        """Ramped half-and-half trees; duplicate individuals redrawn (a few tries)."""
+        pop, seen = [], set()
+        for _ in range(self.population_size):
+            for _attempt in range(10):
+                ind = [random_tree(self.family.pset, self.init_depth, self.max_depth,
+                                   self.max_size) for _ in self.family.actuators]
+                if genome_key(ind) not in seen:
+                    break
+            seen.add(genome_key(ind))
+            pop.append(ind)
+        return pop
+
+    def _set_population(self, pop: list) -> None:
+        self._pop = pop
+        self._keys = [genome_key(ind) for ind in pop]
+        self.costs = None
+
+    @property
+    def population(self) -> list:
+        """The current population as plain-data genomes (token lists)."""
+        return [[list(t) for t in k] for k in self._keys]
+
+    # -- ask / tell ------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        return self._done
+
+    def _known(self) -> dict:
+        same = self._parents_phase == self._cache_phase(self.generation)
+        return self._parents if same else {}
+
+    def ask(self) -> list:
+        """Genomes (lists of token lists) to evaluate at ``progress``; asking
+        again before ``tell`` returns the same list."""
+        if self._done:
+            raise RuntimeError("GP search finished; read best")
+        if self._pending is None:
+            known, seen, pending = self._known(), set(), []
+            for k in self._keys:
+                if k not in known and k not in seen:
+                    seen.add(k)
+                    pending.append(k)
+            self._pending = pending
+        return [[list(t) for t in k] for k in self._pending]
+
+    def tell(self, costs=None, evaluation=None) -> None:
+        """Costs (lower is better) for the genomes of the last ``ask``, in order;
+        non-finite costs count as ``WORST``.  ``evaluation`` (optional, an
+        ``Evaluation``) supplies costs if ``costs`` is None and success counts."""
+        if self._pending is None:
+            raise RuntimeError("tell() without a pending ask()")
+        if costs is None:
+            if evaluation is None:
+                raise ValueError("tell() needs costs or an evaluation")
+            costs = evaluation.costs
+        c = clean_costs(costs, WORST)
+        if c.size != len(self._pending):
+            raise ValueError(f"tell: expected {len(self._pending)} costs, got {c.size}")
+        table = dict(self._known())
+        table.update(zip(self._pending, c.tolist()))
+        self.costs = np.array([table[k] for k in self._keys], dtype=np.float64)
+        self.evaluations += len(self._pending)
+        self._record(len(self._pending), evaluation)
+        self._parents = {k: table[k] for k in self._keys}
+        self._parents_phase = self._cache_phase(self.generation)
+        self._pending = None
+        if self.generation >= self.generations:
+            self._done = True
+            return
+        with self._own_random():
+            self._set_population(self._breed())
+        self.generation += 1
+
+    def _record(self, n_evaluated: int, evaluation) -> None:
+        c = self.costs
+        i = int(np.argmin(c))                    # first of equal minima
+        phase = self.phase_of(self.generation)
+        cost = float(c[i])
+        self.generation_best.append({"generation": self.generation, "progress": self.progress,
+                                     "cost": cost, "genome": [list(t) for t in self._keys[i]]})
+        if self._best_key is None or phase != self._best_phase or cost < self.best_cost:
+            self._best_key, self.best_cost = self._keys[i], cost
+            self.best_generation, self._best_phase = self.generation, phase
+        sizes = [len(t) for ind in self._pop for t in ind]
+        row = {"generation": self.generation, "progress": self.progress,
+               "evaluations": self.evaluations, "evaluated": n_evaluated,
+               "min": cost, "median": float(np.median(c)), "mean": float(np.mean(c)),
+               "best_so_far": self.best_cost, "avg_tree_size": float(np.mean(sizes)),
+               "max_tree_depth": max(t.height for ind in self._pop for t in ind)}
+        if evaluation is not None:
+            row["n_success"] = int(np.sum(evaluation.success))
+            row["n_failed"] = int(np.sum(evaluation.failed))
+        self.history.append(row)
+
+    def _breed(self) -> list:
+        """Next population: elites, then crossover / mutation / reproduction."""
+        costs = self.costs.tolist()
+        order = np.argsort(self.costs, kind="stable")
+        new = [list(self._pop[i]) for i in order[:self.elitism]]   # trees are never
+        pop = self._pop                                             # modified in place
+
+        def pick(k):
+            return (roulette_indices(costs, k) if self.selection == "roulette"
+                    else tournament_indices(costs, k, self.tournament_size))
+        while len(new) < self.population_size:
+            r = random.random()
+            if r < self.p_crossover:
+                i, j = pick(2)
+                a, b, _ = crossover_same_dof(list(pop[i]), list(pop[j]), self._cx)
+                new.extend([a, b][:self.population_size - len(new)])
+            elif r < self.p_crossover + self.p_mutation:
+                (i,) = pick(1)
+                new.append(mutate_one_dof(list(pop[i]), self._mut)[0])
+            else:
+                (i,) = pick(1)
+                new.append(list(pop[i]))
+        return new
+
+    # -- results ---------------------------------------------------------------
+    @property
+    def best(self):
+        """Hall-of-fame genome (token lists), or None before the first ``tell``."""
+        return None if self._best_key is None else [list(t) for t in self._best_key]
+
+    # -- checkpoints -------------------------------------------------------------
+    def state_dict(self) -> dict:
+        """JSON-safe snapshot; a pending ``ask`` is recomputed on resume."""
+        enc = self.family.to_json
+        dec_key = lambda k: enc([list(t) for t in k])  # noqa: E731
+        return {
+            "format": STATE_FORMAT, "pset": self.family.info.hash, "config": self.config(),
+            "generation": self.generation, "evaluations": self.evaluations, "done": self._done,
+            "random": python_random_state_to_json(self._rstate),
+            "population": [dec_key(k) for k in self._keys],
+            "costs": None if self.costs is None else self.costs.tolist(),
+            "parents": None if self._parents_phase is None else {
+                "phase": list(self._parents_phase),
+                "genomes": [dec_key(k) for k in self._parents],
+                "costs": list(self._parents.values())},
+            "best": None if self._best_key is None else {
+                "genome": dec_key(self._best_key), "cost": self.best_cost,
+                "generation": self.best_generation, "phase": list(self._best_phase)},
+            "generation_best": [dict(g, genome=enc(g["genome"])) for g in self.generation_best],
+            "history": [dict(h) for h in self.history],
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        """Restore a :meth:`state_dict` snapshot (its config wins)."""
+        if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
+            raise ValueError(f"not a {STATE_FORMAT} checkpoint")
+        if state.get("pset") != self.family.info.hash:
+            raise ValueError(f"checkpoint primitive set {state.get('pset')} differs from "
+                             f"this family's {self.family.info.hash}")
+        info = self.family.info
+
+        def key(d):
+            return genome_key(tokens_to_tree(t, info) for t in self.family.from_json(d))
+
+        def trees(k):
+            return [tokens_to_tree(list(t), info) for t in k]
+        self._configure({**state["config"], "init_depth": tuple(state["config"]["init_depth"])})
+        self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
+        self._done = bool(state["done"])
+        self._rstate = python_random_state_from_json(state["random"])
+        self._set_population([trees(key(d)) for d in state["population"]])
+        if state["costs"] is not None:
+            self.costs = np.array(state["costs"], dtype=np.float64)
+        par = state["parents"]
+        self._parents = {} if par is None else {
+            key(d): float(c) for d, c in zip(par["genomes"], par["costs"])}
+        self._parents_phase = None if par is None else tuple(par["phase"])
+        b = state["best"]
+        self._best_key = None if b is None else key(b["genome"])
+        self.best_cost = float("inf") if b is None else float(b["cost"])
+        self.best_generation = -1 if b is None else int(b["generation"])
+        self._best_phase = None if b is None else tuple(b["phase"])
+        self.generation_best = [dict(g, genome=[list(t) for t in key(g["genome"])])
+                                for g in state["generation_best"]]
+        self.history = [dict(h) for h in state["history"]]
+        self._pending = None

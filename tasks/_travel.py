@@ -1,0 +1,49 @@
+"""Shared by the travel tasks: Auslander's primary term (horizontal distance
+of the centre of mass) plus the Table 3 secondary terms, and a gait report."""
+import numpy as np
+
+from gpmotion.bsr import secondary
+from gpmotion.sim import geometry
+from gpmotion.task import Term
+
+
+def travel_terms(p):
+    """Rewards as negative weights: cost = −(distance + Σ w·secondary)."""
+    return (Term("distance", -1.0, main=True, doc="com x displacement (m), rewarded"),
+            Term("max_height", -p["w_max_height"], doc="highest com z (m)"),
+            Term("contact_distance", -p["w_contact_distance"], doc="m slid/shuffled in contact"),
+            Term("rotations", -p["w_rotations"], doc="whole-body turns (fractional)"))
+
+
+def travel_measures(traj):
+    fig = traj.figure
+    x = traj.com[..., 0]
+    poses = traj.poses()
+    cx = geometry.points_world(fig.model, poses, fig.model.cp_link, fig.model.cp_pos)[..., 0]
+    pitch = traj.base()[..., 0]
+    return {"distance": x[:, -1] - x[:, 0],
+            "max_height": secondary.max_height(traj.com[..., 1]),
+            "contact_distance": secondary.contact_distance(traj.contact_force, cx),
+            "rotations": secondary.rotations(pitch, whole=False)}
+
+
+def gait(traj, m, e=0):
+    """Name the motion found: cartwheel, hop, shuffle, or crawl/tumble."""
+    airborne = (traj.contact_force[e].max(axis=1) == 0).mean()
+    d = m["distance"][e]
+    if m["rotations"][e] >= 1.0:
+        kind = "cartwheel/tumble"
+    elif airborne > 0.15:
+        kind = "hop"
+    elif m["contact_distance"][e] > 0.5 * abs(d):
+        kind = "shuffle"
+    else:
+        kind = "crawl"
+    contacts = (traj.contact_force[e] > 0).mean(axis=0)
+    pattern = ", ".join(f"{n} {100 * c:.0f}%" for n, c in zip(traj.figure.contact_names, contacts))
+    return [f"gait: {kind}", f"distance {d:.2f} m", f"rotations {m['rotations'][e]:.2f}",
+            f"airborne {100 * airborne:.0f}% of frames", f"slid {m['contact_distance'][e]:.2f} m",
+            f"contact time: {pattern}"]
+
+
+TRAVEL_PARAMS = {"w_max_height": 0.0, "w_contact_distance": 0.0, "w_rotations": 0.0}
