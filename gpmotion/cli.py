@@ -105,8 +105,8 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     try:
         return COMMANDS[args.cmd](args) or 0
-    except KeyboardInterrupt:
-        print("gpmotion: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
         return 130
     except (ValueError, KeyError, OSError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)

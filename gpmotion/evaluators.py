@@ -161,6 +161,8 @@ def _noop(x=None):
 class _ChunkedEvaluator:
     """Common bookkeeping: spec, JSON encoding, chunk planning, reassembly."""
 
+    target_task_seconds = TARGET_TASK_SECONDS     # least work per task for this backend's overhead
+
     def __init__(self, task, family, workers, actuation, chunk_size, plugins, max_retries):
         self.task = task
         self.family = family
@@ -179,7 +181,8 @@ class _ChunkedEvaluator:
         self._hook_after_submit = None        # test hook: called with self after a batch is submitted
 
     def _plan(self, n: int) -> list[tuple[int, int]]:
-        size = self.chunk_size or plan_chunk_size(n, self.workers, self.seconds_per_evaluation)
+        size = self.chunk_size or plan_chunk_size(n, self.workers, self.seconds_per_evaluation,
+                                                  self.target_task_seconds)
         self.last_chunk_size = size
         return chunk_bounds(n, size)
 
@@ -339,6 +342,10 @@ class DaskEvaluator(_ChunkedEvaluator):
     still fails with ``KilledWorker`` is resubmitted up to ``max_retries`` times.
     """
 
+    # A Dask task costs ~2 ms of scheduler time and ~10 ms round trip (benchmarks/evaluators.py):
+    # give each task >= 0.1 s of work.
+    target_task_seconds = 0.1
+
     def __init__(self, task, family, scheduler: str = "local", workers: int = 2, actuation=None,
                  chunk_size=None, plugins=(), max_retries: int = 3, timeout: float = 60.0):
         scheduler = check_scheduler(scheduler)
@@ -354,7 +361,9 @@ class DaskEvaluator(_ChunkedEvaluator):
             if scheduler == "local":
                 self._cluster = distributed.LocalCluster(
                     n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                    dashboard_address=None, env=dict(_WORKER_ENV))
+                    dashboard_address=None, env=dict(_WORKER_ENV),
+                    # no dashboard; its bare HTTP endpoints on a free loopback port, not :8787
+                    scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
                 self._client = distributed.Client(self._cluster, timeout=timeout)
             else:
                 self._client = distributed.Client(scheduler, timeout=timeout)

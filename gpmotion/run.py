@@ -169,6 +169,9 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
         if old is not None:
             signal.signal(signal.SIGINT, old)
         evaluator.close()
+    if stop["flag"]:
+        raise KeyboardInterrupt(f"checkpoint saved after generation {search.generation}; "
+                                f"`gpmotion resume {rd.path}` continues")
     if search.done:
         write_best(rd, cfg, task, family, actuation, search)
         if artifacts:

@@ -196,7 +196,7 @@ def test_bad_workers(task, workers):
 
 
 @pytest.mark.parametrize("address", ["localhost:8786", "tcp://", "tcp://host", "tcp://host:0",
-                                     "tcp://host:99999", "http://host:8786", "tcp://a b:1", "", None, 8786])
+                                     "tcp://host:99999", "http://host:8786", "tcp://a b:1", "", " ", 8786])
 def test_bad_scheduler_address(task, address):
     fam = make_family("gp", task)
     with pytest.raises(ValueError, match="scheduler"):
@@ -207,6 +207,11 @@ def test_bad_scheduler_address(task, address):
                                      "tcp://[::1]:8786", "ws://node-3:8786"])
 def test_good_scheduler_address(address):
     assert check_scheduler(address) == address
+
+
+def test_no_scheduler_is_not_an_address():
+    with pytest.raises(ValueError, match="scheduler"):
+        check_scheduler(None)
 
 
 def test_bad_chunk_size(task):
@@ -269,3 +274,5 @@ def test_dask_survives_killed_worker(task):
         got = ev.evaluate(pop)
         assert killed
         assert_identical(got, ref)
+        assert killed[0] not in ev.worker_pids().values()     # its tasks really ran elsewhere
+        assert_identical(ev.evaluate(pop), ref)

@@ -90,7 +90,7 @@ def random_tree(pset, depth: tuple[int, int], max_depth: int, max_size: int,
         t = gp.PrimitiveTree(gp.genHalfAndHalf(pset, min_=lo, max_=hi if k < tries // 2 else lo))
         if len(t) <= max_size and t.height <= max_depth:
             return t
-    return gp.PrimitiveTree(gp.genGrow(pset, min_=0, max_=min(lo, 2)))
+    return gp.PrimitiveTree(gp.genFull(pset, min_=0, max_=0))      # a single terminal
 
 
 # ------------------------------------------------------------------ selection

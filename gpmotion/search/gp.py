@@ -37,9 +37,12 @@ Decisions, stated once here:
   puts the caller's back.  A search is therefore deterministic whatever other
   code does with ``random``, and leaves it untouched (not thread-safe: do not
   use ``random`` from another thread while ``tell`` runs).
-* ``generations`` = number of *bred* generations; generations 0..G are
-  evaluated, progress = generation / G (1 for G = 0), so the last generation
-  is scored with every style term fully on.
+* ``generations`` = G generations are evaluated, 0..G-1 (generation 0 is
+  the random one; G = 1 is random search).  ``generation`` counts the
+  generations told so far (= index of the one ``ask`` hands out), and
+  ``progress = generation / (G - 1)`` (1 for G = 1), so the last generation
+  is scored with every style term fully on (``generation / G`` never reaches
+  1, and a term ramping up to progress 1 would never count in full).
 """
 from __future__ import annotations
 
@@ -88,7 +91,6 @@ class GPSearch:
         self.generation = 0
         self.evaluations = 0
         self.costs: np.ndarray | None = None      # costs of the current population, once told
-        self._done = False
         self._pending: list[tuple] | None = None
         self._parents: dict[tuple, float] = {}    # last told generation: key -> cost
         self._parents_phase: tuple | None = None
@@ -105,8 +107,8 @@ class GPSearch:
             raise ValueError(f"GPSearch: {what}, got {value!r}")
         if not _is_int(c["population"]) or c["population"] < 2:
             bad("population must be an integer >= 2", c["population"])
-        if not _is_int(c["generations"]) or c["generations"] < 0:
-            bad("generations must be an integer >= 0", c["generations"])
+        if not _is_int(c["generations"]) or c["generations"] < 1:
+            bad("generations must be an integer >= 1", c["generations"])
         for k in ("p_crossover", "p_mutation"):
             if isinstance(c[k], bool) or not isinstance(c[k], (int, float)) or not 0 <= c[k] <= 1:
                 bad(f"{k} must be a number in [0, 1]", c[k])
@@ -158,7 +160,7 @@ class GPSearch:
 
     # -- phases --------------------------------------------------------------
     def progress_of(self, generation: int) -> float:
-        return 1.0 if self.generations == 0 else min(1.0, generation / self.generations)
+        return 1.0 if self.generations == 1 else min(1.0, generation / (self.generations - 1))
 
     @property
     def progress(self) -> float:
@@ -201,7 +203,7 @@ class GPSearch:
     # -- ask / tell ------------------------------------------------------------
     @property
     def done(self) -> bool:
-        return self._done
+        return self.generation >= self.generations
 
     def _known(self) -> dict:
         same = self._parents_phase == self._cache_phase(self.generation)
@@ -210,7 +212,7 @@ class GPSearch:
     def ask(self) -> list:
         """Genomes (lists of token lists) to evaluate at ``progress``; asking
         again before ``tell`` returns the same list."""
-        if self._done:
+        if self.done:
             raise RuntimeError("GP search finished; read best")
         if self._pending is None:
             known, seen, pending = self._known(), set(), []
@@ -242,11 +244,9 @@ class GPSearch:
         self._parents = {k: table[k] for k in self._keys}
         self._parents_phase = self._cache_phase(self.generation)
         self._pending = None
-        if self.generation >= self.generations:
-            self._done = True
-            return
-        with self._own_random():
-            self._set_population(self._breed())
+        if self.generation + 1 < self.generations:       # the last population stays
+            with self._own_random():
+                self._set_population(self._breed())
         self.generation += 1
 
     def _record(self, n_evaluated: int, evaluation) -> None:
@@ -307,7 +307,7 @@ class GPSearch:
         dec_key = lambda k: enc([list(t) for t in k])  # noqa: E731
         return {
             "format": STATE_FORMAT, "pset": self.family.info.hash, "config": self.config(),
-            "generation": self.generation, "evaluations": self.evaluations, "done": self._done,
+            "generation": self.generation, "evaluations": self.evaluations,
             "random": python_random_state_to_json(self._rstate),
             "population": [dec_key(k) for k in self._keys],
             "costs": None if self.costs is None else self.costs.tolist(),
@@ -338,7 +338,6 @@ class GPSearch:
             return [tokens_to_tree(list(t), info) for t in k]
         self._configure({**state["config"], "init_depth": tuple(state["config"]["init_depth"])})
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
-        self._done = bool(state["done"])
         self._rstate = python_random_state_from_json(state["random"])
         self._set_population([trees(key(d)) for d in state["population"]])
         if state["costs"] is not None:

@@ -19,7 +19,7 @@ ctrl_init = _ctrl.init
 ctrl_control = _ctrl.control
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", boundscheck=False)
 def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
                 ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                 out_pole, out_impact, out_energy, out_targets, out_senses, status):
@@ -33,8 +33,8 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     X = np.zeros((nl, 4))
     v = np.zeros((nl, 3))
     cbias = np.zeros((nl, 3))
-    IA = np.zeros((nl, 3, 3))
-    Ia = np.zeros((3, 3))
+    cs = np.zeros((nl, 2))
+    IA = np.zeros((nl, 6))
     pA = np.zeros((nl, 3))
     acc = np.zeros((nl, 3))
     qdd = np.zeros(nl)
@@ -55,16 +55,20 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     max_impact = 0.0
     energy = 0.0
     frame = 0
+    countdown = 0                  # steps until the next recorded frame
     ctrl_init(ci, cf, cstate)
     status[0] = 0
     status[1] = -1
     for step in range(n_steps + 1):
         t = step * dt
-        kinematics(M, q, qd, pose, X, v, cbias)
-        fext[:, :] = 0.0
-        ground_contacts(M, S, pose, v, anchor, touching, fext, cforce)
-        pen = pole_contacts(M, S, pose, v, fext)
-        centre_of_mass(M, pose, v, com)
+        kinematics(M, q, qd, pose, X, v, cbias, cs)
+        for i in range(nl):
+            fext[i, 0] = 0.0
+            fext[i, 1] = 0.0
+            fext[i, 2] = 0.0
+        ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce)
+        pen = pole_contacts(M, S, pose, cs, v, fext)
+        centre_of_mass(M, pose, cs, v, com)
         total = 0.0
         for k in range(nc):
             total += cforce[k]
@@ -72,12 +76,13 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
                 max_cf[k] = cforce[k]
         max_impact = max(max_impact, total)
         max_pole = max(max_pole, pen)
-        compute_senses(M, S.goal, q, qd, pose, v, com, cforce, t, senses, senses_norm)
+        compute_senses(M, S.goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_norm)
         for a in range(na):
             targets[a] = M.neutral[a]
             taus[a] = default_tau
         ctrl_control(ci, cf, senses, senses_norm, t, cstate, targets, taus)
-        if step % every == 0:
+        if countdown == 0:
+            countdown = every
             out_q[frame, :] = q
             out_qd[frame, :] = qd
             out_com[frame, :] = com
@@ -93,10 +98,11 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
             max_impact = 0.0
             energy = 0.0
             frame += 1
+        countdown -= 1
         if step == n_steps:
             break
         joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
-        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, S.gravity, IA, pA, acc, qdd, Ia)
+        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, S.gravity, IA, pA, acc, qdd)
         for a in range(na):
             i = M.act_dof[a]
             energy += abs(tau[i] * qd[i]) * dt

@@ -11,8 +11,21 @@ numbers ``(c, s, X10, X20)`` of its matrix
 
 Every link has one degree of freedom with motion subspace S = e_k
 (k = 0 hinge, 1 slide-x, 2 slide-z), so products with S are indexing.
-Kernels are small and allocation-free; the plain-numpy twins live in
-``tests/reference/planar_ref.py``.
+
+Speed notes (the step loop of the rollout runs these millions of times):
+
+* ``kinematics`` also fills ``cs[i] = (cos θ_i, sin θ_i)`` of every link's
+  world angle, composed from the parent's and the joint's (one sin/cos pair
+  per hinge per step); contacts, centre of mass and senses read ``cs``
+  instead of calling the trig functions again;
+* articulated inertias are symmetric and kept packed, six numbers per link
+  ``(I00, I01, I02, I11, I12, I22)``; the ABA works in scalars;
+* kernels are allocation-free and compiled with ``error_model="numpy"`` (a
+  division by zero gives inf/NaN, which the divergence check catches, instead
+  of a branch and an exception).  No ``fastmath``: ``integrate`` relies on
+  NaN comparisons.
+
+The plain-numpy twins live in ``tests/reference/planar_ref.py``.
 """
 from __future__ import annotations
 
@@ -21,71 +34,83 @@ from numba import njit
 
 REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
 
+_JIT = dict(cache=True, error_model="numpy", boundscheck=False)
+_INLINE = dict(_JIT, inline="always")
 
-@njit(cache=True, inline="always")
+
+@njit(**_INLINE)
 def _xm(X, m0, m1, m2):
     """X · m for a motion vector."""
     c, s = X[0], X[1]
     return m0, X[2] * m0 + c * m1 + s * m2, X[3] * m0 - s * m1 + c * m2
 
 
-@njit(cache=True, inline="always")
+@njit(**_INLINE)
 def _xtf(X, f0, f1, f2):
     """Xᵀ · f: a force from the child frame to the parent frame."""
     c, s = X[0], X[1]
     return f0 + X[2] * f1 + X[3] * f2, c * f1 - s * f2, s * f1 + c * f2
 
 
-@njit(cache=True)
-def _add_xtix(X, A, B):
-    """B += Xᵀ A X  (A symmetric 3×3), in scalars: no allocation per step."""
+@njit(**_INLINE)
+def _add_xtix(X, a00, a01, a02, a11, a12, a22, B):
+    """B += Xᵀ A X  for symmetric A (six scalars) and packed symmetric B."""
     c, s, x10, x20 = X[0], X[1], X[2], X[3]
-    for r in range(3):  # row r of C = A X, then the three rows of Xᵀ C
-        c0 = A[r, 0] + A[r, 1] * x10 + A[r, 2] * x20
-        c1 = A[r, 1] * c - A[r, 2] * s
-        c2 = A[r, 1] * s + A[r, 2] * c
-        # (Xᵀ C)[k, j] = Σ_r X[r, k] C[r, j]; X[:, 0] = (1, x10, x20), X[:, 1] = (0, c, −s), X[:, 2] = (0, s, c)
-        xr0 = 1.0 if r == 0 else (x10 if r == 1 else x20)
-        xr1 = 0.0 if r == 0 else (c if r == 1 else -s)
-        xr2 = 0.0 if r == 0 else (s if r == 1 else c)
-        B[0, 0] += xr0 * c0
-        B[0, 1] += xr0 * c1
-        B[0, 2] += xr0 * c2
-        B[1, 0] += xr1 * c0
-        B[1, 1] += xr1 * c1
-        B[1, 2] += xr1 * c2
-        B[2, 0] += xr2 * c0
-        B[2, 1] += xr2 * c1
-        B[2, 2] += xr2 * c2
+    # C = A X (rows r = 0, 1, 2)
+    c00 = a00 + a01 * x10 + a02 * x20
+    c01 = a01 * c - a02 * s
+    c02 = a01 * s + a02 * c
+    c10 = a01 + a11 * x10 + a12 * x20
+    c11 = a11 * c - a12 * s
+    c12 = a11 * s + a12 * c
+    c20 = a02 + a12 * x10 + a22 * x20
+    c21 = a12 * c - a22 * s
+    c22 = a12 * s + a22 * c
+    # Xᵀ C; columns of X: (1, x10, x20), (0, c, −s), (0, s, c)
+    B[0] += c00 + x10 * c10 + x20 * c20
+    B[1] += c01 + x10 * c11 + x20 * c21
+    B[2] += c02 + x10 * c12 + x20 * c22
+    B[3] += c * c11 - s * c21
+    B[4] += c * c12 - s * c22
+    B[5] += s * c12 + c * c22
 
 
-@njit(cache=True)
-def kinematics(M, q, qd, pose, X, v, cbias):
-    """World poses, parent→link transforms, link velocities and velocity-product terms."""
+@njit(**_INLINE)
+def kinematics(M, q, qd, pose, X, v, cbias, cs):
+    """World poses, parent→link transforms, link velocities and velocity-product terms.
+
+    ``cs[i] = (cos θ_i, sin θ_i)`` of the world angle ``θ_i = pose[i, 0]``.
+    """
     for i in range(q.shape[0]):
         p = M.parent[i]
         a0, rx, rz = M.xtree[i, 0], M.xtree[i, 1], M.xtree[i, 2]
         if p >= 0:
             thp, xp, zp = pose[p, 0], pose[p, 1], pose[p, 2]
+            cp, sp = cs[p, 0], cs[p, 1]
             vp0, vp1, vp2 = v[p, 0], v[p, 1], v[p, 2]
         else:
             thp, xp, zp = 0.0, 0.0, 0.0
+            cp, sp = 1.0, 0.0
             vp0, vp1, vp2 = 0.0, 0.0, 0.0
-        cp, sp = np.cos(thp), np.sin(thp)
         jx = xp + cp * rx - sp * rz
         jz = zp + sp * rx + cp * rz
         jt = M.jtype[i]
         if jt == REVOLUTE:
             ang = a0 + q[i]
+            c, s = np.cos(ang), np.sin(ang)
             pose[i, 0], pose[i, 1], pose[i, 2] = thp + ang, jx, jz
+            cw, sw = cp * c - sp * s, sp * c + cp * s
         else:
-            ang = a0
+            if a0 == 0.0:
+                c, s = 1.0, 0.0
+                cw, sw = cp, sp
+            else:
+                c, s = np.cos(a0), np.sin(a0)
+                cw, sw = cp * c - sp * s, sp * c + cp * s
             dx, dz = (q[i], 0.0) if jt == SLIDE_X else (0.0, q[i])
-            ca, sa = np.cos(a0), np.sin(a0)
-            rx, rz = rx + ca * dx - sa * dz, rz + sa * dx + ca * dz
-            cw, sw = np.cos(thp + a0), np.sin(thp + a0)
+            rx, rz = rx + c * dx - s * dz, rz + s * dx + c * dz
             pose[i, 0], pose[i, 1], pose[i, 2] = thp + a0, jx + cw * dx - sw * dz, jz + sw * dx + cw * dz
-        c, s = np.cos(ang), np.sin(ang)
+        cs[i, 0], cs[i, 1] = cw, sw
         X[i, 0], X[i, 1], X[i, 2], X[i, 3] = c, s, s * rx - c * rz, c * rx + s * rz
         m0, m1, m2 = _xm(X[i], vp0, vp1, vp2)
         w = qd[i]
@@ -102,9 +127,9 @@ def kinematics(M, q, qd, pose, X, v, cbias):
         v[i, 0], v[i, 1], v[i, 2] = m0, m1, m2
 
 
-@njit(cache=True, inline="always")
+@njit(**_INLINE)
 def link_inertia(M, i, I):
-    """Spatial inertia of link i about its origin, in link coordinates (mcI)."""
+    """Spatial inertia of link i about its origin, in link coordinates (mcI), 3×3."""
     m, cx, cz = M.mass[i], M.com[i, 0], M.com[i, 1]
     I[0, 0] = M.icom[i] + m * (cx * cx + cz * cz)
     I[0, 1] = I[1, 0] = -m * cz
@@ -113,54 +138,72 @@ def link_inertia(M, i, I):
     I[1, 2] = I[2, 1] = 0.0
 
 
-@njit(cache=True)
-def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd, Ia):
+@njit(**_INLINE)
+def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
     ``presc[i] != 0`` marks dof i as kinematic: its acceleration is
     ``presc_qdd[i]``; on return ``tau[i]`` holds the torque that realises it.
-    ``fext[i]`` is the external spatial force on link i in link coordinates;
-    ``Ia`` is a 3×3 scratch.
+    ``fext[i]`` is the external spatial force on link i in link coordinates.
+    Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
+    (bias forces), ``a[nl, 3]`` (link accelerations).
     """
     nl = qd.shape[0]
     for i in range(nl):
-        link_inertia(M, i, IA[i])
-        h0 = IA[i, 0, 0] * v[i, 0] + IA[i, 0, 1] * v[i, 1] + IA[i, 0, 2] * v[i, 2]
-        h1 = IA[i, 1, 0] * v[i, 0] + IA[i, 1, 1] * v[i, 1]
-        h2 = IA[i, 2, 0] * v[i, 0] + IA[i, 2, 2] * v[i, 2]
+        m, cx, cz = M.mass[i], M.com[i, 0], M.com[i, 1]
+        i00 = M.icom[i] + m * (cx * cx + cz * cz)
+        i01 = -m * cz
+        i02 = m * cx
+        IA[i, 0], IA[i, 1], IA[i, 2] = i00, i01, i02
+        IA[i, 3], IA[i, 4], IA[i, 5] = m, 0.0, m
+        v0, v1, v2 = v[i, 0], v[i, 1], v[i, 2]
+        h0 = i00 * v0 + i01 * v1 + i02 * v2
+        h1 = i01 * v0 + m * v1
+        h2 = i02 * v0 + m * v2
         # crf(v) · h  =  (−vz h1 + vx h2, −ω h2, ω h1)
-        pA[i, 0] = -v[i, 2] * h1 + v[i, 1] * h2 - fext[i, 0]
-        pA[i, 1] = -v[i, 0] * h2 - fext[i, 1]
-        pA[i, 2] = v[i, 0] * h1 - fext[i, 2]
+        pA[i, 0] = -v2 * h1 + v1 * h2 - fext[i, 0]
+        pA[i, 1] = -v0 * h2 - fext[i, 1]
+        pA[i, 2] = v0 * h1 - fext[i, 2]
     for i in range(nl - 1, -1, -1):
         k = M.jtype[i]
         p = M.parent[i]
+        a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
+        e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
         if presc[i]:
             # the joint moves as told: the parent sees the whole articulated inertia
             w = presc_qdd[i]
-            for r in range(3):
-                for col in range(3):
-                    Ia[r, col] = IA[i, r, col]
-            e0 = cbias[i, 0] + (w if k == 0 else 0.0)
-            e1 = cbias[i, 1] + (w if k == 1 else 0.0)
-            e2 = cbias[i, 2] + (w if k == 2 else 0.0)
-            pa0 = pA[i, 0] + Ia[0, 0] * e0 + Ia[0, 1] * e1 + Ia[0, 2] * e2
-            pa1 = pA[i, 1] + Ia[1, 0] * e0 + Ia[1, 1] * e1 + Ia[1, 2] * e2
-            pa2 = pA[i, 2] + Ia[2, 0] * e0 + Ia[2, 1] * e1 + Ia[2, 2] * e2
+            if k == 0:
+                e0 += w
+            elif k == 1:
+                e1 += w
+            else:
+                e2 += w
+            pa0 = pA[i, 0] + a00 * e0 + a01 * e1 + a02 * e2
+            pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2
+            pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2
         else:
-            d = IA[i, k, k]
-            u = tau[i] - pA[i, k]
-            for r in range(3):
-                for col in range(3):
-                    Ia[r, col] = IA[i, r, col] - IA[i, r, k] * IA[i, col, k] / d
-            e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
-            ud = u / d
-            pa0 = pA[i, 0] + Ia[0, 0] * e0 + Ia[0, 1] * e1 + Ia[0, 2] * e2 + IA[i, 0, k] * ud
-            pa1 = pA[i, 1] + Ia[1, 0] * e0 + Ia[1, 1] * e1 + Ia[1, 2] * e2 + IA[i, 1, k] * ud
-            pa2 = pA[i, 2] + Ia[2, 0] * e0 + Ia[2, 1] * e1 + Ia[2, 2] * e2 + IA[i, 2, k] * ud
+            # U = IA e_k (column k), d = U_k
+            if k == 0:
+                u0, u1, u2 = a00, a01, a02
+            elif k == 1:
+                u0, u1, u2 = a01, a11, a12
+            else:
+                u0, u1, u2 = a02, a12, a22
+            d = u0 if k == 0 else (u1 if k == 1 else u2)
+            ud = (tau[i] - pA[i, k]) / d
+            a00 -= u0 * u0 / d
+            a01 -= u0 * u1 / d
+            a02 -= u0 * u2 / d
+            a11 -= u1 * u1 / d
+            a12 -= u1 * u2 / d
+            a22 -= u2 * u2 / d
+            pa0 = pA[i, 0] + a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
+            pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
+            pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
         if p >= 0:
-            _add_xtix(X[i], Ia, IA[p])
-            f0, f1, f2 = _xtf(X[i], pa0, pa1, pa2)
+            Xi = X[i]
+            _add_xtix(Xi, a00, a01, a02, a11, a12, a22, IA[p])
+            f0, f1, f2 = _xtf(Xi, pa0, pa1, pa2)
             pA[p, 0] += f0
             pA[p, 1] += f1
             pA[p, 2] += f2
@@ -175,10 +218,17 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         a1 += cbias[i, 1]
         a2 += cbias[i, 2]
         k = M.jtype[i]
+        if k == 0:
+            u0, u1, u2 = IA[i, 0], IA[i, 1], IA[i, 2]
+        elif k == 1:
+            u0, u1, u2 = IA[i, 1], IA[i, 3], IA[i, 4]
+        else:
+            u0, u1, u2 = IA[i, 2], IA[i, 4], IA[i, 5]
         if presc[i]:
             acc = presc_qdd[i]
         else:
-            acc = (tau[i] - pA[i, k] - (IA[i, 0, k] * a0 + IA[i, 1, k] * a1 + IA[i, 2, k] * a2)) / IA[i, k, k]
+            d = u0 if k == 0 else (u1 if k == 1 else u2)
+            acc = (tau[i] - pA[i, k] - (u0 * a0 + u1 * a1 + u2 * a2)) / d
         qdd[i] = acc
         if k == 0:
             a0 += acc
@@ -188,45 +238,46 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
             a2 += acc
         a[i, 0], a[i, 1], a[i, 2] = a0, a1, a2
         if presc[i]:
-            tau[i] = IA[i, 0, k] * a0 + IA[i, 1, k] * a1 + IA[i, 2, k] * a2 + pA[i, k]
+            tau[i] = u0 * a0 + u1 * a1 + u2 * a2 + pA[i, k]
 
 
-@njit(cache=True, inline="always")
-def point_world(M, pose, link, px, pz):
+@njit(**_INLINE)
+def point_world(M, pose, cs, link, px, pz):
     """World position of a point given in link coordinates (link −1: fixed root)."""
     if link >= 0:
-        th, x, z = pose[link, 0], pose[link, 1], pose[link, 2]
+        x, z = pose[link, 1], pose[link, 2]
+        c, s = cs[link, 0], cs[link, 1]
     else:
         th, x, z = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
-    c, s = np.cos(th), np.sin(th)
+        c, s = np.cos(th), np.sin(th)
     return x + c * px - s * pz, z + s * px + c * pz
 
 
-@njit(cache=True, inline="always")
-def point_velocity(pose, v, link, px, pz):
+@njit(**_INLINE)
+def point_velocity(cs, v, link, px, pz):
     """World velocity of a point given in link coordinates."""
     if link < 0:
         return 0.0, 0.0
     w = v[link, 0]
     lx, lz = v[link, 1] - w * pz, v[link, 2] + w * px
-    c, s = np.cos(pose[link, 0]), np.sin(pose[link, 0])
+    c, s = cs[link, 0], cs[link, 1]
     return c * lx - s * lz, s * lx + c * lz
 
 
-@njit(cache=True, inline="always")
-def apply_point_force(pose, fext, link, px, pz, fx, fz):
+@njit(**_INLINE)
+def apply_point_force(cs, fext, link, px, pz, fx, fz):
     """Add a world force (fx, fz) acting at a link-frame point to ``fext[link]``."""
     if link < 0:
         return
-    c, s = np.cos(pose[link, 0]), np.sin(pose[link, 0])
+    c, s = cs[link, 0], cs[link, 1]
     lx, lz = c * fx + s * fz, -s * fx + c * fz
     fext[link, 0] += px * lz - pz * lx
     fext[link, 1] += lx
     fext[link, 2] += lz
 
 
-@njit(cache=True)
-def ground_contacts(M, S, pose, v, anchor, touching, fext, cforce):
+@njit(**_INLINE)
+def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     """Penalty ground contact with a stick–slip friction anchor per point.
 
     Normal: spring-damper on penetration, never pulling.  Tangential: a
@@ -239,12 +290,12 @@ def ground_contacts(M, S, pose, v, anchor, touching, fext, cforce):
             continue
         link = M.cp_link[k]
         px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
-        x, z = point_world(M, pose, link, px, pz)
+        x, z = point_world(M, pose, cs, link, px, pz)
         pen = S.ground_z - z
         if pen <= 0.0:
             touching[k] = 0.0
             continue
-        vx, vz = point_velocity(pose, v, link, px, pz)
+        vx, vz = point_velocity(cs, v, link, px, pz)
         fn = S.k_ground * pen - S.c_ground * vz
         if fn < 0.0:
             fn = 0.0
@@ -257,19 +308,19 @@ def ground_contacts(M, S, pose, v, anchor, touching, fext, cforce):
             ft = lim if ft > 0 else -lim
             anchor[k] = x + (ft + S.c_tangent * vx) / S.k_tangent if S.k_tangent > 0 else x
         cforce[k] = fn
-        apply_point_force(pose, fext, link, px, pz, ft, fn)
+        apply_point_force(cs, fext, link, px, pz, ft, fn)
 
 
-@njit(cache=True)
-def pole_contacts(M, S, pose, v, fext):
+@njit(**_INLINE)
+def pole_contacts(M, S, pose, cs, v, fext):
     """Capsule–pole penalty contact (frictionless); returns the deepest penetration."""
     deepest = 0.0
     for j in range(S.poles.shape[0]):
         cx, cz, rp = S.poles[j, 0], S.poles[j, 1], S.poles[j, 2]
         for g in range(M.seg_link.shape[0]):
             link = M.seg_link[g]
-            ax, az = point_world(M, pose, link, M.seg_a[g, 0], M.seg_a[g, 1])
-            bx, bz = point_world(M, pose, link, M.seg_b[g, 0], M.seg_b[g, 1])
+            ax, az = point_world(M, pose, cs, link, M.seg_a[g, 0], M.seg_a[g, 1])
+            bx, bz = point_world(M, pose, cs, link, M.seg_b[g, 0], M.seg_b[g, 1])
             dx, dz = bx - ax, bz - az
             L2 = dx * dx + dz * dz
             t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
@@ -284,14 +335,14 @@ def pole_contacts(M, S, pose, v, fext):
             nx, nz = ex / dist, ez / dist
             lx = M.seg_a[g, 0] + t * (M.seg_b[g, 0] - M.seg_a[g, 0])
             lz = M.seg_a[g, 1] + t * (M.seg_b[g, 1] - M.seg_a[g, 1])
-            vx, vz = point_velocity(pose, v, link, lx, lz)
+            vx, vz = point_velocity(cs, v, link, lx, lz)
             fn = S.k_pole * pen - S.c_pole * (vx * nx + vz * nz)
             if fn > 0.0:
-                apply_point_force(pose, fext, link, lx, lz, fn * nx, fn * nz)
+                apply_point_force(cs, fext, link, lx, lz, fn * nx, fn * nz)
     return deepest
 
 
-@njit(cache=True)
+@njit(**_INLINE)
 def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
     """Passive damping, joint limits, then PD servos or kinematic responses."""
     for i in range(q.shape[0]):
@@ -317,8 +368,8 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
             presc_qdd[i] = (target - q[i] - 2.0 * tc * qd[i]) / (tc * tc)
 
 
-@njit(cache=True)
-def centre_of_mass(M, pose, v, com):
+@njit(**_INLINE)
+def centre_of_mass(M, pose, cs, v, com):
     """com = (x, z, vx, vz) of the moving links (a fixed root body is excluded)."""
     mt = sx = sz = svx = svz = 0.0
     for i in range(M.mass.shape[0]):
@@ -326,8 +377,8 @@ def centre_of_mass(M, pose, v, com):
         if m == 0.0:
             continue
         cx, cz = M.com[i, 0], M.com[i, 1]
-        x, z = point_world(M, pose, i, cx, cz)
-        vx, vz = point_velocity(pose, v, i, cx, cz)
+        x, z = point_world(M, pose, cs, i, cx, cz)
+        vx, vz = point_velocity(cs, v, i, cx, cz)
         mt += m
         sx += m * x
         sz += m * z
@@ -337,8 +388,8 @@ def centre_of_mass(M, pose, v, com):
         com[0], com[1], com[2], com[3] = sx / mt, sz / mt, svx / mt, svz / mt
 
 
-@njit(cache=True)
-def mechanical_energy(M, S, q, qd, pose, v):
+@njit(**_JIT)
+def mechanical_energy(M, S, q, qd, pose, cs, v):
     """Kinetic + gravitational potential energy (for conservation tests and logs)."""
     ke = 0.0
     pe = 0.0
@@ -350,12 +401,12 @@ def mechanical_energy(M, S, q, qd, pose, v):
         for r in range(3):
             for c in range(3):
                 ke += 0.5 * v[i, r] * I[r, c] * v[i, c]
-        x, z = point_world(M, pose, i, M.com[i, 0], M.com[i, 1])
+        x, z = point_world(M, pose, cs, i, M.com[i, 0], M.com[i, 1])
         pe += M.mass[i] * S.gravity * z
     return ke + pe
 
 
-@njit(cache=True)
+@njit(**_INLINE)
 def integrate(q, qd, qdd, dt, limit):
     """Semi-implicit Euler; returns False when the state is non-finite or absurd."""
     ok = True

@@ -41,17 +41,17 @@ def sense_layout(actuators, contacts, lo, hi, total_mass, overrides):
     return names, np.array(los), np.array(his)
 
 
-@njit(cache=True)
-def compute_senses(M, goal, q, qd, pose, v, com, cforce, t, senses, senses_norm):
+@njit(cache=True, error_model="numpy", boundscheck=False, inline="always")
+def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_norm):
     """Fill ``senses`` and ``senses_norm`` from the current kinematic state.
 
-    ``pose[i] = (θ, x, z)`` world pose of link i, ``v[i]`` its spatial
-    velocity in link coordinates, ``com = (x, z, vx, vz)``.
+    ``pose[i] = (θ, x, z)`` world pose of link i, ``cs[i] = (cos θ, sin θ)``,
+    ``v[i]`` its spatial velocity in link coordinates, ``com = (x, z, vx, vz)``.
     """
     b = M.base_link
     if b >= 0:
         th, x, z = pose[b, 0], pose[b, 1], pose[b, 2]
-        c, s = np.cos(th), np.sin(th)
+        c, s = cs[b, 0], cs[b, 1]
         vx = c * v[b, 1] - s * v[b, 2]
         vz = s * v[b, 1] + c * v[b, 2]
         w = v[b, 0]
