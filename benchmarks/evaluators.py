@@ -35,8 +35,6 @@ import random
 import sys
 import time
 
-import numpy as np
-
 
 def _population(family, n, seed):
     from deap import gp

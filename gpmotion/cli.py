@@ -36,7 +36,12 @@ def _add_run_args(p):
     p.add_argument("--seeds", type=int, default=1, help="independent runs with seeds seed..seed+K-1")
     p.add_argument("--generations", type=int, help="GP generations / serial-search rounds")
     p.add_argument("--population", type=int, help="GP population size")
-    p.add_argument("--selection", choices=["roulette", "tournament"], help="GP selection")
+    p.add_argument("--selection", choices=["roulette", "tournament"],
+                   help="GP selection (default roulette, fitness-proportionate)")
+    p.add_argument("--p-crossover", type=float, help="GP crossover probability (default 0.9)")
+    p.add_argument("--p-mutation", type=float, help="GP mutation probability (default 0.02)")
+    p.add_argument("--elitism", type=int, help="GP elites copied unchanged (default 1)")
+    p.add_argument("--max-size", type=int, help="GP nodes per tree cap (default 200)")
     p.add_argument("--working", type=int, help="serial search: working controllers C (default 10)")
     p.add_argument("--reseed-every", type=int, help="serial search: reseeding interval (default 200)")
     p.add_argument("--rules", type=int, help="BSR rules per controller")
@@ -150,9 +155,15 @@ def _run_configs(args):
                         ("--threads", args.threads, 1)):
         validate_number(name, v, lo=lo, hi=10_000_000, integer=True, allow_none=True)
     validate_number("--t-per", args.t_per, lo=1e-3, hi=1e3, allow_none=True)
+    validate_number("--p-crossover", args.p_crossover, lo=0, hi=1, allow_none=True)
+    validate_number("--p-mutation", args.p_mutation, lo=0, hi=1, allow_none=True)
+    validate_number("--elitism", args.elitism, lo=0, hi=10**6, integer=True, allow_none=True)
+    validate_number("--max-size", args.max_size, lo=1, hi=512, integer=True, allow_none=True)
     gp = args.controller == "gp"
     search = ({"population": args.population, "generations": args.generations,
-               "selection": args.selection} if gp else
+               "selection": args.selection, "p_crossover": args.p_crossover,
+               "p_mutation": args.p_mutation, "elitism": args.elitism,
+               "max_size": args.max_size} if gp else
               {"n_working": args.working, "n_generations": args.generations,
                "reseed_every": args.reseed_every})
     fam = {} if gp else {"rules": args.rules, "t_per": args.t_per}
@@ -186,8 +197,6 @@ def cmd_run(args):
     from .run import run
     results = []
     for cfg, out in _run_configs(args):
-        print(f"run {cfg.task} ({cfg.family}, seed {cfg.seed}"
-              f"{', ' + str(cfg.params) if cfg.params else ''}) → {out}", file=sys.stderr)
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
                              artifacts=not args.no_artifacts)
         results.append((out, cost, rd))

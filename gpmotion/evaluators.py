@@ -216,12 +216,6 @@ class _ChunkedEvaluator:
     def __exit__(self, *exc):
         self.close()
 
-    def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
-
 
 # ---- process pool ------------------------------------------------------------------
 
@@ -277,7 +271,9 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
                         results[futures[f]] = f.result()
                     elif isinstance(exc, BrokenProcessPool):
                         broken = True
-                    else:
+                    else:                              # deterministic failure of the evaluation
+                        for g in pending:
+                            g.cancel()
                         raise exc
                 if broken:
                     # Collect what already finished; the rest fails fast once broken.
@@ -303,6 +299,12 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
 
     def close(self):
         self._discard_pool()
+
+    def __del__(self):
+        try:
+            self._discard_pool()
+        except Exception:
+            pass
 
 
 # ---- Dask --------------------------------------------------------------------------

@@ -90,18 +90,16 @@ class Progress:
 
 
 def _log_row(search, ev: Evaluation, evals_total: int, elapsed: float) -> dict:
-    c = ev.costs
-    return {"generation": search.generation, "evaluations": evals_total,
-            "progress": round(search.progress, 6), "best_so_far": search.best_cost,
-            "gen_min": float(c.min()), "gen_median": float(np.median(c)),
-            "gen_mean": float(c.mean()), "solved": int(ev.success.sum()),
-            "failed": int(ev.failed.sum()), "elapsed_s": round(elapsed, 3)}
+    row = search.row(ev)
+    return {"generation": row.pop("generation"), "evaluations": evals_total, **row,
+            "elapsed_s": round(elapsed, 3)}
 
 
-def _trim_log(run: RunDir, generation: int):
-    """On resume, drop log rows written after the checkpoint was taken."""
+def _trim_log(run: RunDir, evaluations: int):
+    """On resume, drop log rows written after the checkpoint was taken
+    (rows count evaluations, which only grow)."""
     rows = run.read_log()
-    keep = [r for r in rows if int(r["generation"]) <= generation]
+    keep = [r for r in rows if int(r["evaluations"]) <= evaluations]
     if len(keep) != len(rows) or (run.log_path.exists() and not rows):
         from .records import atomic_write_text
         import csv
@@ -126,13 +124,16 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
     else:       # validate everything before touching the disk
         task, family, search, actuation = build(cfg)
         rd = RunDir.create(out, force=force)
+    if not quiet:
+        print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
+              f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
     evals = 0
     elapsed0 = 0.0
     if resume and rd.checkpoint_path.exists():
         ck = rd.load_checkpoint()
         search.load_state_dict(ck["search"])
         evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
-        _trim_log(rd, search.generation)
+        _trim_log(rd, evals)
     elif not resume:
         rd.write_config({"run": cfg.to_json(), "task_config": task.config(),
                          "family_config": family.config(), "actuation": actuation,

@@ -114,23 +114,34 @@ def test_existing_run_directory_is_never_overwritten(tmp_path, capsys):
     assert (out / "precious.txt").read_text() == "keep me"
 
 
-@pytest.mark.parametrize("mangle, needle", [
-    (lambda s: s[: len(s) // 2], "best.json"),
-    (lambda s: s.replace('"add"', '"os.system"'), "os.system"),
-    (lambda s: s.replace('"format": "gpmotion-best"', '"format": "gpmotion-checkpoint"'), "format"),
-])
-def test_malformed_controller_files_are_rejected(tmp_path, capsys, mangle, needle):
+def _tampered(tmp_path, edit):
     out = tmp_path / "r"
     assert main(["run", "lamp_hop", "--out", str(out), "--no-artifacts", *TINY]) == 0
-    best = out / "best.json"
-    text = best.read_text()
-    if '"add"' not in text and "os.system" in needle:
-        text = text.replace('"trees": [[', '"trees": [["add", ', 1)
-    best.write_text(mangle(text))
+    path = out / "best.json"
+    path.write_text(edit(path.read_text()))
+    return path
+
+
+def _edit_tree(text, tree):
+    rec = json.loads(text)
+    rec["genome"]["trees"][0] = tree
+    return json.dumps(rec)
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda s: s[: len(s) // 2], "best.json"),
+    (lambda s: _edit_tree(s, ["os.system", "px"]), "os.system"),
+    (lambda s: _edit_tree(s, ["add", "px"]), "missing arguments"),
+    (lambda s: _edit_tree(s, ["sin"] * 40 + ["px"]), "depth"),
+    (lambda s: _edit_tree(s, ["__import__"]), "__import__"),
+    (lambda s: s.replace('"gpmotion-best"', '"gpmotion-checkpoint"'), "format"),
+])
+def test_malformed_controller_files_are_rejected(tmp_path, capsys, edit, needle):
+    path = _tampered(tmp_path, edit)
     capsys.readouterr()
-    assert main(["replay", str(best)]) == 2
+    assert main(["replay", str(path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("gpmotion: error:") and "\n" not in err
+    assert err.startswith("gpmotion: error:") and needle in err and "\n" not in err
 
 
 def test_wrong_number_of_trees_is_rejected(tmp_path, capsys):

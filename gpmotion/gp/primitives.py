@@ -66,6 +66,7 @@ class Primitive:
 
 
 _REGISTRY: dict[str, Primitive] = {}
+MAX_ARITY = 4
 _BUILTIN_PACKAGE = "gpmotion.primitives"
 
 
@@ -102,8 +103,9 @@ def register(name: str, func: Callable, arity: int, symbol: str | None = None) -
     """Register ``func`` as primitive ``name``; a duplicate from another file is an error."""
     if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
         raise ValueError(f"primitive name {name!r} must be a Python identifier")
-    if not isinstance(arity, int) or arity < 1:
-        raise ValueError(f"primitive {name!r}: arity must be an int >= 1, got {arity!r}")
+    if not isinstance(arity, int) or not 1 <= arity <= MAX_ARITY:
+        raise ValueError(f"primitive {name!r}: arity must be an int in 1..{MAX_ARITY}, got {arity!r} "
+                         "(the interpreter's stack holds depth-17 trees of at most 4-argument nodes)")
     file = str(Path(inspect.getsourcefile(func) or "<unknown>").resolve())
     old = _REGISTRY.get(name)
     if old is not None:

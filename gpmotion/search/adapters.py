@@ -12,8 +12,10 @@ import numpy as np
 from ..evaluate import Evaluation
 from .serial import SerialSearch
 
+# Gritz & Hahn: crossover-dominant, little mutation, fitness-proportionate
+# selection; we keep one elite so the best is never lost.
 GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0.02,
-                   selection="tournament", tournament_size=5, elitism=2)
+                   selection="roulette", elitism=1)
 SERIAL_DEFAULTS = dict(n_working=10, n_generations=4000, reseed_every=200)
 
 
@@ -63,6 +65,16 @@ class GPAdapter:
     def load_state_dict(self, d):
         self.search.load_state_dict(d)
 
+    def row(self, ev: Evaluation) -> dict:
+        """log.csv row of the generation just told (whole population, not
+        only the genomes evaluated this time: copies reuse their costs)."""
+        h = self.search.history[-1]
+        return {"generation": h["generation"], "progress": round(h["progress"], 6),
+                "best_so_far": h["best_so_far"], "gen_min": h["min"], "gen_median": h["median"],
+                "gen_mean": h["mean"], "evaluated": h["evaluated"],
+                "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
+                "avg_tree_size": round(h["avg_tree_size"], 2)}
+
 
 class SerialAdapter:
     """Auslander's serial search minimizing task costs; a 'generation' is one
@@ -111,6 +123,14 @@ class SerialAdapter:
 
     def load_state_dict(self, d):
         self.search.load_state_dict(d)
+
+    def row(self, ev: Evaluation) -> dict:
+        c = ev.costs
+        return {"generation": self.search.generation, "progress": round(self.progress, 6),
+                "best_so_far": self.best_cost, "gen_min": float(c.min()),
+                "gen_median": float(np.median(c)), "gen_mean": float(c.mean()),
+                "evaluated": len(c), "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
+                "avg_tree_size": ""}
 
 
 def make_search(family, seed: int, **opts):
