@@ -39,23 +39,23 @@ _INLINE = dict(_JIT, inline="always")
 
 
 @njit(**_INLINE)
-def _xm(X, m0, m1, m2):
-    """X · m for a motion vector."""
-    c, s = X[0], X[1]
-    return m0, X[2] * m0 + c * m1 + s * m2, X[3] * m0 - s * m1 + c * m2
+def _xm(X, i, m0, m1, m2):
+    """X[i] · m for a motion vector."""
+    c, s = X[i, 0], X[i, 1]
+    return m0, X[i, 2] * m0 + c * m1 + s * m2, X[i, 3] * m0 - s * m1 + c * m2
 
 
 @njit(**_INLINE)
-def _xtf(X, f0, f1, f2):
-    """Xᵀ · f: a force from the child frame to the parent frame."""
-    c, s = X[0], X[1]
-    return f0 + X[2] * f1 + X[3] * f2, c * f1 - s * f2, s * f1 + c * f2
+def _xtf(X, i, f0, f1, f2):
+    """X[i]ᵀ · f: a force from the child frame to the parent frame."""
+    c, s = X[i, 0], X[i, 1]
+    return f0 + X[i, 2] * f1 + X[i, 3] * f2, c * f1 - s * f2, s * f1 + c * f2
 
 
 @njit(**_INLINE)
-def _add_xtix(X, a00, a01, a02, a11, a12, a22, B):
-    """B += Xᵀ A X  for symmetric A (six scalars) and packed symmetric B."""
-    c, s, x10, x20 = X[0], X[1], X[2], X[3]
+def _add_xtix(X, i, a00, a01, a02, a11, a12, a22, B, p):
+    """B[p] += X[i]ᵀ A X[i]  for symmetric A (six scalars) and packed symmetric B."""
+    c, s, x10, x20 = X[i, 0], X[i, 1], X[i, 2], X[i, 3]
     # C = A X (rows r = 0, 1, 2)
     c00 = a00 + a01 * x10 + a02 * x20
     c01 = a01 * c - a02 * s
@@ -67,23 +67,26 @@ def _add_xtix(X, a00, a01, a02, a11, a12, a22, B):
     c21 = a12 * c - a22 * s
     c22 = a12 * s + a22 * c
     # Xᵀ C; columns of X: (1, x10, x20), (0, c, −s), (0, s, c)
-    B[0] += c00 + x10 * c10 + x20 * c20
-    B[1] += c01 + x10 * c11 + x20 * c21
-    B[2] += c02 + x10 * c12 + x20 * c22
-    B[3] += c * c11 - s * c21
-    B[4] += c * c12 - s * c22
-    B[5] += s * c12 + c * c22
+    B[p, 0] += c00 + x10 * c10 + x20 * c20
+    B[p, 1] += c01 + x10 * c11 + x20 * c21
+    B[p, 2] += c02 + x10 * c12 + x20 * c22
+    B[p, 3] += c * c11 - s * c21
+    B[p, 4] += c * c12 - s * c22
+    B[p, 5] += s * c12 + c * c22
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def kinematics(M, q, qd, pose, X, v, cbias, cs):
     """World poses, parent→link transforms, link velocities and velocity-product terms.
 
     ``cs[i] = (cos θ_i, sin θ_i)`` of the world angle ``θ_i = pose[i, 0]``.
     """
+    # Model fields are read once, up front: a field read inside a branch
+    # defeats numba's reference-count pruning and costs ~0.1 µs per call
+    parent, jtype, xtree = M.parent, M.jtype, M.xtree
     for i in range(q.shape[0]):
-        p = M.parent[i]
-        a0, rx, rz = M.xtree[i, 0], M.xtree[i, 1], M.xtree[i, 2]
+        p = parent[i]
+        a0, rx, rz = xtree[i, 0], xtree[i, 1], xtree[i, 2]
         if p >= 0:
             thp, xp, zp = pose[p, 0], pose[p, 1], pose[p, 2]
             cp, sp = cs[p, 0], cs[p, 1]
@@ -94,7 +97,7 @@ def kinematics(M, q, qd, pose, X, v, cbias, cs):
             vp0, vp1, vp2 = 0.0, 0.0, 0.0
         jx = xp + cp * rx - sp * rz
         jz = zp + sp * rx + cp * rz
-        jt = M.jtype[i]
+        jt = jtype[i]
         if jt == REVOLUTE:
             ang = a0 + q[i]
             c, s = np.cos(ang), np.sin(ang)
@@ -111,8 +114,11 @@ def kinematics(M, q, qd, pose, X, v, cbias, cs):
             rx, rz = rx + c * dx - s * dz, rz + s * dx + c * dz
             pose[i, 0], pose[i, 1], pose[i, 2] = thp + a0, jx + cw * dx - sw * dz, jz + sw * dx + cw * dz
         cs[i, 0], cs[i, 1] = cw, sw
-        X[i, 0], X[i, 1], X[i, 2], X[i, 3] = c, s, s * rx - c * rz, c * rx + s * rz
-        m0, m1, m2 = _xm(X[i], vp0, vp1, vp2)
+        x10, x20 = s * rx - c * rz, c * rx + s * rz
+        X[i, 0], X[i, 1], X[i, 2], X[i, 3] = c, s, x10, x20
+        m0 = vp0
+        m1 = x10 * vp0 + c * vp1 + s * vp2
+        m2 = x20 * vp0 - s * vp1 + c * vp2
         w = qd[i]
         if jt == REVOLUTE:
             m0 += w
@@ -138,7 +144,7 @@ def link_inertia(M, i, I):
     I[1, 2] = I[2, 1] = 0.0
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
@@ -148,10 +154,11 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
     Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
     (bias forces), ``a[nl, 3]`` (link accelerations).
     """
+    parent, jtype, mass, com, icom = M.parent, M.jtype, M.mass, M.com, M.icom
     nl = qd.shape[0]
     for i in range(nl):
-        m, cx, cz = M.mass[i], M.com[i, 0], M.com[i, 1]
-        i00 = M.icom[i] + m * (cx * cx + cz * cz)
+        m, cx, cz = mass[i], com[i, 0], com[i, 1]
+        i00 = icom[i] + m * (cx * cx + cz * cz)
         i01 = -m * cz
         i02 = m * cx
         IA[i, 0], IA[i, 1], IA[i, 2] = i00, i01, i02
@@ -165,8 +172,8 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         pA[i, 1] = -v0 * h2 - fext[i, 1]
         pA[i, 2] = v0 * h1 - fext[i, 2]
     for i in range(nl - 1, -1, -1):
-        k = M.jtype[i]
-        p = M.parent[i]
+        k = jtype[i]
+        p = parent[i]
         a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
         e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
         if presc[i]:
@@ -182,52 +189,51 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
             pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2
             pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2
         else:
-            # U = IA e_k (column k), d = U_k
+            # U = IA e_k (column k), d = U_k;  Ia = IA − U Uᵀ / d
             if k == 0:
-                u0, u1, u2 = a00, a01, a02
+                u0, u1, u2, d = a00, a01, a02, a00
             elif k == 1:
-                u0, u1, u2 = a01, a11, a12
+                u0, u1, u2, d = a01, a11, a12, a11
             else:
-                u0, u1, u2 = a02, a12, a22
-            d = u0 if k == 0 else (u1 if k == 1 else u2)
-            ud = (tau[i] - pA[i, k]) / d
-            a00 -= u0 * u0 / d
-            a01 -= u0 * u1 / d
-            a02 -= u0 * u2 / d
-            a11 -= u1 * u1 / d
-            a12 -= u1 * u2 / d
-            a22 -= u2 * u2 / d
+                u0, u1, u2, d = a02, a12, a22, a22
+            dinv = 1.0 / d
+            ud = (tau[i] - pA[i, k]) * dinv
+            w0, w1, w2 = u0 * dinv, u1 * dinv, u2 * dinv
+            a00 -= u0 * w0
+            a01 -= u0 * w1
+            a02 -= u0 * w2
+            a11 -= u1 * w1
+            a12 -= u1 * w2
+            a22 -= u2 * w2
             pa0 = pA[i, 0] + a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
             pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
             pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
         if p >= 0:
-            Xi = X[i]
-            _add_xtix(Xi, a00, a01, a02, a11, a12, a22, IA[p])
-            f0, f1, f2 = _xtf(Xi, pa0, pa1, pa2)
+            _add_xtix(X, i, a00, a01, a02, a11, a12, a22, IA, p)
+            f0, f1, f2 = _xtf(X, i, pa0, pa1, pa2)
             pA[p, 0] += f0
             pA[p, 1] += f1
             pA[p, 2] += f2
     for i in range(nl):
-        p = M.parent[i]
+        p = parent[i]
         if p >= 0:
             ap0, ap1, ap2 = a[p, 0], a[p, 1], a[p, 2]
         else:
             ap0, ap1, ap2 = 0.0, 0.0, gravity  # fictitious base acceleration
-        a0, a1, a2 = _xm(X[i], ap0, ap1, ap2)
+        a0, a1, a2 = _xm(X, i, ap0, ap1, ap2)
         a0 += cbias[i, 0]
         a1 += cbias[i, 1]
         a2 += cbias[i, 2]
-        k = M.jtype[i]
+        k = jtype[i]
         if k == 0:
-            u0, u1, u2 = IA[i, 0], IA[i, 1], IA[i, 2]
+            u0, u1, u2, d = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 0]
         elif k == 1:
-            u0, u1, u2 = IA[i, 1], IA[i, 3], IA[i, 4]
+            u0, u1, u2, d = IA[i, 1], IA[i, 3], IA[i, 4], IA[i, 3]
         else:
-            u0, u1, u2 = IA[i, 2], IA[i, 4], IA[i, 5]
+            u0, u1, u2, d = IA[i, 2], IA[i, 4], IA[i, 5], IA[i, 5]
         if presc[i]:
             acc = presc_qdd[i]
         else:
-            d = u0 if k == 0 else (u1 if k == 1 else u2)
             acc = (tau[i] - pA[i, k] - (u0 * a0 + u1 * a1 + u2 * a2)) / d
         qdd[i] = acc
         if k == 0:
@@ -242,20 +248,22 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
 
 
 @njit(**_INLINE)
-def point_world(M, pose, cs, link, px, pz):
-    """World position of a point given in link coordinates (link −1: fixed root)."""
-    if link >= 0:
-        x, z = pose[link, 1], pose[link, 2]
-        c, s = cs[link, 0], cs[link, 1]
-    else:
-        th, x, z = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
-        c, s = np.cos(th), np.sin(th)
+def point_world(pose, cs, link, px, pz):
+    """World position of a point given in link coordinates (link >= 0)."""
+    c, s = cs[link, 0], cs[link, 1]
+    return pose[link, 1] + c * px - s * pz, pose[link, 2] + s * px + c * pz
+
+
+@njit(**_INLINE)
+def fixed_point_world(th, x, z, px, pz):
+    """World position of a point on a fixed root body placed at ``(θ, x, z)`` (link −1)."""
+    c, s = np.cos(th), np.sin(th)
     return x + c * px - s * pz, z + s * px + c * pz
 
 
 @njit(**_INLINE)
 def point_velocity(cs, v, link, px, pz):
-    """World velocity of a point given in link coordinates."""
+    """World velocity of a point given in link coordinates (zero on a fixed root)."""
     if link < 0:
         return 0.0, 0.0
     w = v[link, 0]
@@ -276,7 +284,7 @@ def apply_point_force(cs, fext, link, px, pz, fx, fz):
     fext[link, 2] += lz
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     """Penalty ground contact with a stick–slip friction anchor per point.
 
@@ -284,43 +292,57 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     spring to the point where contact began (so a figure at rest does not
     creep), clamped at μ·Fn; when it slips the anchor is dragged along.
     """
-    for k in range(M.cp_link.shape[0]):
+    cp_link, cp_pos, fixed = M.cp_link, M.cp_pos, M.fixed_pose
+    fth, fx, fz = fixed[0], fixed[1], fixed[2]
+    ground, ground_z, k_ground, c_ground = S.ground, S.ground_z, S.k_ground, S.c_ground
+    k_tangent, c_tangent, mu = S.k_tangent, S.c_tangent, S.mu
+    for k in range(cp_link.shape[0]):
         cforce[k] = 0.0
-        if S.ground == 0:
+        if ground == 0:
             continue
-        link = M.cp_link[k]
-        px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
-        x, z = point_world(M, pose, cs, link, px, pz)
-        pen = S.ground_z - z
+        link = cp_link[k]
+        px, pz = cp_pos[k, 0], cp_pos[k, 1]
+        if link >= 0:
+            x, z = point_world(pose, cs, link, px, pz)
+        else:
+            x, z = fixed_point_world(fth, fx, fz, px, pz)
+        pen = ground_z - z
         if pen <= 0.0:
             touching[k] = 0.0
             continue
         vx, vz = point_velocity(cs, v, link, px, pz)
-        fn = S.k_ground * pen - S.c_ground * vz
+        fn = k_ground * pen - c_ground * vz
         if fn < 0.0:
             fn = 0.0
         if touching[k] == 0.0:
             anchor[k] = x
             touching[k] = 1.0
-        ft = -S.k_tangent * (x - anchor[k]) - S.c_tangent * vx
-        lim = S.mu * fn
+        ft = -k_tangent * (x - anchor[k]) - c_tangent * vx
+        lim = mu * fn
         if ft > lim or ft < -lim:
             ft = lim if ft > 0 else -lim
-            anchor[k] = x + (ft + S.c_tangent * vx) / S.k_tangent if S.k_tangent > 0 else x
+            anchor[k] = x + (ft + c_tangent * vx) / k_tangent if k_tangent > 0 else x
         cforce[k] = fn
         apply_point_force(cs, fext, link, px, pz, ft, fn)
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def pole_contacts(M, S, pose, cs, v, fext):
     """Capsule–pole penalty contact (frictionless); returns the deepest penetration."""
+    seg_link, seg_a, seg_b, seg_r, fixed = M.seg_link, M.seg_a, M.seg_b, M.seg_r, M.fixed_pose
+    fth, fx, fz = fixed[0], fixed[1], fixed[2]
+    poles, k_pole, c_pole = S.poles, S.k_pole, S.c_pole
     deepest = 0.0
-    for j in range(S.poles.shape[0]):
-        cx, cz, rp = S.poles[j, 0], S.poles[j, 1], S.poles[j, 2]
-        for g in range(M.seg_link.shape[0]):
-            link = M.seg_link[g]
-            ax, az = point_world(M, pose, cs, link, M.seg_a[g, 0], M.seg_a[g, 1])
-            bx, bz = point_world(M, pose, cs, link, M.seg_b[g, 0], M.seg_b[g, 1])
+    for j in range(poles.shape[0]):
+        cx, cz, rp = poles[j, 0], poles[j, 1], poles[j, 2]
+        for g in range(seg_link.shape[0]):
+            link = seg_link[g]
+            if link >= 0:
+                ax, az = point_world(pose, cs, link, seg_a[g, 0], seg_a[g, 1])
+                bx, bz = point_world(pose, cs, link, seg_b[g, 0], seg_b[g, 1])
+            else:
+                ax, az = fixed_point_world(fth, fx, fz, seg_a[g, 0], seg_a[g, 1])
+                bx, bz = fixed_point_world(fth, fx, fz, seg_b[g, 0], seg_b[g, 1])
             dx, dz = bx - ax, bz - az
             L2 = dx * dx + dz * dz
             t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
@@ -328,56 +350,59 @@ def pole_contacts(M, S, pose, cs, v, fext):
             qx, qz = ax + t * dx, az + t * dz
             ex, ez = qx - cx, qz - cz
             dist = np.sqrt(ex * ex + ez * ez)
-            pen = M.seg_r[g] + rp - dist
+            pen = seg_r[g] + rp - dist
             if pen <= 0.0 or dist == 0.0:
                 continue
             deepest = max(deepest, pen)
             nx, nz = ex / dist, ez / dist
-            lx = M.seg_a[g, 0] + t * (M.seg_b[g, 0] - M.seg_a[g, 0])
-            lz = M.seg_a[g, 1] + t * (M.seg_b[g, 1] - M.seg_a[g, 1])
+            lx = seg_a[g, 0] + t * (seg_b[g, 0] - seg_a[g, 0])
+            lz = seg_a[g, 1] + t * (seg_b[g, 1] - seg_a[g, 1])
             vx, vz = point_velocity(cs, v, link, lx, lz)
-            fn = S.k_pole * pen - S.c_pole * (vx * nx + vz * nz)
+            fn = k_pole * pen - c_pole * (vx * nx + vz * nz)
             if fn > 0.0:
                 apply_point_force(cs, fext, link, lx, lz, fn * nx, fn * nz)
     return deepest
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
     """Passive damping, joint limits, then PD servos or kinematic responses."""
+    damping, lo, hi, limit_k, limit_c = M.damping, M.lo, M.hi, M.limit_k, M.limit_c
+    act_dof, neutral, kp, kd, tau_max = M.act_dof, M.neutral, M.kp, M.kd, M.tau_max
     for i in range(q.shape[0]):
-        tau[i] = -M.damping[i] * qd[i]
+        tau[i] = -damping[i] * qd[i]
         presc[i] = 0
         # a limit is a unilateral spring-damper: it pushes back, never pulls
-        if q[i] < M.lo[i]:
-            tau[i] += max(0.0, M.limit_k * (M.lo[i] - q[i]) - M.limit_c * qd[i])
-        elif q[i] > M.hi[i]:
-            tau[i] += min(0.0, M.limit_k * (M.hi[i] - q[i]) - M.limit_c * qd[i])
-    for a in range(M.act_dof.shape[0]):
-        i = M.act_dof[a]
+        if q[i] < lo[i]:
+            tau[i] += max(0.0, limit_k * (lo[i] - q[i]) - limit_c * qd[i])
+        elif q[i] > hi[i]:
+            tau[i] += min(0.0, limit_k * (hi[i] - q[i]) - limit_c * qd[i])
+    for a in range(act_dof.shape[0]):
+        i = act_dof[a]
         target = targets[a]
         if not np.isfinite(target):  # a controller's NaN must not poison the physics
-            target = M.neutral[a]
-        target = min(M.hi[i], max(M.lo[i], target))
+            target = neutral[a]
+        target = min(hi[i], max(lo[i], target))
         if actuation == 0:
-            u = M.kp[a] * (target - q[i]) - M.kd[a] * qd[i]
-            tau[i] += min(M.tau_max[a], max(-M.tau_max[a], u))
+            u = kp[a] * (target - q[i]) - kd[a] * qd[i]
+            tau[i] += min(tau_max[a], max(-tau_max[a], u))
         else:
             tc = max(taus[a], 2.0 * dt)
             presc[i] = 1
             presc_qdd[i] = (target - q[i] - 2.0 * tc * qd[i]) / (tc * tc)
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def centre_of_mass(M, pose, cs, v, com):
     """com = (x, z, vx, vz) of the moving links (a fixed root body is excluded)."""
+    mass, lcom = M.mass, M.com
     mt = sx = sz = svx = svz = 0.0
-    for i in range(M.mass.shape[0]):
-        m = M.mass[i]
+    for i in range(mass.shape[0]):
+        m = mass[i]
         if m == 0.0:
             continue
-        cx, cz = M.com[i, 0], M.com[i, 1]
-        x, z = point_world(M, pose, cs, i, cx, cz)
+        cx, cz = lcom[i, 0], lcom[i, 1]
+        x, z = point_world(pose, cs, i, cx, cz)
         vx, vz = point_velocity(cs, v, i, cx, cz)
         mt += m
         sx += m * x
@@ -401,12 +426,12 @@ def mechanical_energy(M, S, q, qd, pose, cs, v):
         for r in range(3):
             for c in range(3):
                 ke += 0.5 * v[i, r] * I[r, c] * v[i, c]
-        x, z = point_world(M, pose, cs, i, M.com[i, 0], M.com[i, 1])
+        x, z = point_world(pose, cs, i, M.com[i, 0], M.com[i, 1])
         pe += M.mass[i] * S.gravity * z
     return ke + pe
 
 
-@njit(**_INLINE)
+@njit(**_JIT)
 def integrate(q, qd, qdd, dt, limit):
     """Semi-implicit Euler; returns False when the state is non-finite or absurd."""
     ok = True
