@@ -113,8 +113,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as e:
         print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
         return 130
-    except (ValueError, KeyError, OSError) as e:
+    except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
+        if type(e).__name__ == "WorkerLost":
+            msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
         return 2
 

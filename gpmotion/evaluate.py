@@ -72,10 +72,31 @@ class InProcessEvaluator:
         pass
 
 
+def code_digest() -> str:
+    """Hash of gpmotion's own sources: workers on other code would give other results."""
+    global _CODE
+    if _CODE is None:
+        from pathlib import Path
+
+        from .cache import file_digest
+        root = Path(__file__).resolve().parent
+        files = sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+        import gpmotion.primitives as prims
+        import gpmotion.tasks as tasks
+        for pkg in (prims, tasks):
+            files += sorted(Path(pkg.__path__[0]).glob("*.py"))
+        _CODE = file_digest(*files)
+    return _CODE
+
+
+_CODE = None
+
+
 def spec_of(task: Task, family: Family, actuation: str, plugins=()) -> dict:
     """Plain-data description a remote worker rebuilds the evaluator from."""
     return {"task": task.name, "params": dict(task.p), "family": family.name,
-            "options": dict(family.options), "actuation": actuation, "plugins": list(plugins)}
+            "options": dict(family.options), "actuation": actuation, "plugins": list(plugins),
+            "code": code_digest()}
 
 
 _WORKER_CACHE: dict[str, InProcessEvaluator] = {}
@@ -86,6 +107,9 @@ def evaluator_from_spec(spec: dict, threads: int | None = None) -> InProcessEval
     key = json.dumps(spec, sort_keys=True)
     ev = _WORKER_CACHE.get(key)
     if ev is None:
+        if spec.get("code", code_digest()) != code_digest():
+            raise ValueError("this worker runs different gpmotion code than the run's main process; "
+                             "install the same version everywhere")
         from .plugins import load_folder
         for folder in spec.get("plugins", ()):
             load_folder(folder)

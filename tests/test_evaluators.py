@@ -93,10 +93,13 @@ def test_process_pool_survives_killed_worker(task):
         ev._hook_after_submit = kill_one
         got = ev.evaluate(pop)
         ev._hook_after_submit = None
-        assert killed and ev.restarts >= 1
-        assert killed[0] not in ev.worker_pids()
+        assert killed
         assert_identical(got, ref)
         assert_identical(ev.evaluate(pop), ref)                # the rebuilt pool keeps working
+        # (on a heavily loaded machine the kill may land after the batch: then the next batch
+        # finds the pool broken and recovers; either way exactly one loss is recovered from)
+        assert ev.restarts == 1, ev.restarts
+        assert killed[0] not in ev.worker_pids()
 
 
 def test_worker_error_propagates_without_retry(task):

@@ -27,6 +27,7 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     nc = M.cp_link.shape[0]
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
+    n_poles = S.poles.shape[0]
     q = q0.copy()
     qd = qd0.copy()
     pose = np.zeros((nl, 3))
@@ -67,7 +68,9 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
             fext[i, 1] = 0.0
             fext[i, 2] = 0.0
         ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce)
-        pen = pole_contacts(M, S, pose, cs, v, fext)
+        pen = 0.0
+        if n_poles > 0:            # a call, not inlined: most scenes have no poles
+            pen = pole_contacts(M, S, pose, cs, v, fext)
         centre_of_mass(M, pose, cs, v, com)
         total = 0.0
         for k in range(nc):

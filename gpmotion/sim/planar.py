@@ -39,54 +39,14 @@ _INLINE = dict(_JIT, inline="always")
 
 
 @njit(**_INLINE)
-def _xm(X, i, m0, m1, m2):
-    """X[i] · m for a motion vector."""
-    c, s = X[i, 0], X[i, 1]
-    return m0, X[i, 2] * m0 + c * m1 + s * m2, X[i, 3] * m0 - s * m1 + c * m2
-
-
-@njit(**_INLINE)
-def _xtf(X, i, f0, f1, f2):
-    """X[i]ᵀ · f: a force from the child frame to the parent frame."""
-    c, s = X[i, 0], X[i, 1]
-    return f0 + X[i, 2] * f1 + X[i, 3] * f2, c * f1 - s * f2, s * f1 + c * f2
-
-
-@njit(**_INLINE)
-def _add_xtix(X, i, a00, a01, a02, a11, a12, a22, B, p):
-    """B[p] += X[i]ᵀ A X[i]  for symmetric A (six scalars) and packed symmetric B."""
-    c, s, x10, x20 = X[i, 0], X[i, 1], X[i, 2], X[i, 3]
-    # C = A X (rows r = 0, 1, 2)
-    c00 = a00 + a01 * x10 + a02 * x20
-    c01 = a01 * c - a02 * s
-    c02 = a01 * s + a02 * c
-    c10 = a01 + a11 * x10 + a12 * x20
-    c11 = a11 * c - a12 * s
-    c12 = a11 * s + a12 * c
-    c20 = a02 + a12 * x10 + a22 * x20
-    c21 = a12 * c - a22 * s
-    c22 = a12 * s + a22 * c
-    # Xᵀ C; columns of X: (1, x10, x20), (0, c, −s), (0, s, c)
-    B[p, 0] += c00 + x10 * c10 + x20 * c20
-    B[p, 1] += c01 + x10 * c11 + x20 * c21
-    B[p, 2] += c02 + x10 * c12 + x20 * c22
-    B[p, 3] += c * c11 - s * c21
-    B[p, 4] += c * c12 - s * c22
-    B[p, 5] += s * c12 + c * c22
-
-
-@njit(**_JIT)
 def kinematics(M, q, qd, pose, X, v, cbias, cs):
     """World poses, parent→link transforms, link velocities and velocity-product terms.
 
     ``cs[i] = (cos θ_i, sin θ_i)`` of the world angle ``θ_i = pose[i, 0]``.
     """
-    # Model fields are read once, up front: a field read inside a branch
-    # defeats numba's reference-count pruning and costs ~0.1 µs per call
-    parent, jtype, xtree = M.parent, M.jtype, M.xtree
     for i in range(q.shape[0]):
-        p = parent[i]
-        a0, rx, rz = xtree[i, 0], xtree[i, 1], xtree[i, 2]
+        p = M.parent[i]
+        a0, rx, rz = M.xtree[i, 0], M.xtree[i, 1], M.xtree[i, 2]
         if p >= 0:
             thp, xp, zp = pose[p, 0], pose[p, 1], pose[p, 2]
             cp, sp = cs[p, 0], cs[p, 1]
@@ -97,7 +57,7 @@ def kinematics(M, q, qd, pose, X, v, cbias, cs):
             vp0, vp1, vp2 = 0.0, 0.0, 0.0
         jx = xp + cp * rx - sp * rz
         jz = zp + sp * rx + cp * rz
-        jt = jtype[i]
+        jt = M.jtype[i]
         if jt == REVOLUTE:
             ang = a0 + q[i]
             c, s = np.cos(ang), np.sin(ang)
@@ -144,7 +104,7 @@ def link_inertia(M, i, I):
     I[1, 2] = I[2, 1] = 0.0
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
@@ -154,11 +114,10 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
     Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
     (bias forces), ``a[nl, 3]`` (link accelerations).
     """
-    parent, jtype, mass, com, icom = M.parent, M.jtype, M.mass, M.com, M.icom
     nl = qd.shape[0]
     for i in range(nl):
-        m, cx, cz = mass[i], com[i, 0], com[i, 1]
-        i00 = icom[i] + m * (cx * cx + cz * cz)
+        m, cx, cz = M.mass[i], M.com[i, 0], M.com[i, 1]
+        i00 = M.icom[i] + m * (cx * cx + cz * cz)
         i01 = -m * cz
         i02 = m * cx
         IA[i, 0], IA[i, 1], IA[i, 2] = i00, i01, i02
@@ -171,33 +130,35 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         pA[i, 0] = -v2 * h1 + v1 * h2 - fext[i, 0]
         pA[i, 1] = -v0 * h2 - fext[i, 1]
         pA[i, 2] = v0 * h1 - fext[i, 2]
+    # numba: branches below touch scalars only; array reads inside if/else
+    # can defeat reference-count pruning (atomic increments every call)
     for i in range(nl - 1, -1, -1):
-        k = jtype[i]
-        p = parent[i]
+        k = M.jtype[i]
+        p = M.parent[i]
+        pr, w, ti = presc[i], presc_qdd[i], tau[i]
         a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
         e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
-        if presc[i]:
+        pa0, pa1, pa2 = pA[i, 0], pA[i, 1], pA[i, 2]
+        # U = IA e_k (column k), d = U_k
+        if k == 0:
+            u0, u1, u2, d, pk = a00, a01, a02, a00, pa0
+        elif k == 1:
+            u0, u1, u2, d, pk = a01, a11, a12, a11, pa1
+        else:
+            u0, u1, u2, d, pk = a02, a12, a22, a22, pa2
+        if pr:
             # the joint moves as told: the parent sees the whole articulated inertia
-            w = presc_qdd[i]
             if k == 0:
                 e0 += w
             elif k == 1:
                 e1 += w
             else:
                 e2 += w
-            pa0 = pA[i, 0] + a00 * e0 + a01 * e1 + a02 * e2
-            pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2
-            pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2
+            ud = 0.0
         else:
-            # U = IA e_k (column k), d = U_k;  Ia = IA − U Uᵀ / d
-            if k == 0:
-                u0, u1, u2, d = a00, a01, a02, a00
-            elif k == 1:
-                u0, u1, u2, d = a01, a11, a12, a11
-            else:
-                u0, u1, u2, d = a02, a12, a22, a22
+            # Ia = IA − U Uᵀ / d
             dinv = 1.0 / d
-            ud = (tau[i] - pA[i, k]) * dinv
+            ud = (ti - pk) * dinv
             w0, w1, w2 = u0 * dinv, u1 * dinv, u2 * dinv
             a00 -= u0 * w0
             a01 -= u0 * w1
@@ -205,36 +166,53 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
             a11 -= u1 * w1
             a12 -= u1 * w2
             a22 -= u2 * w2
-            pa0 = pA[i, 0] + a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
-            pa1 = pA[i, 1] + a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
-            pa2 = pA[i, 2] + a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
+        pa0 += a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
+        pa1 += a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
+        pa2 += a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
         if p >= 0:
-            _add_xtix(X, i, a00, a01, a02, a11, a12, a22, IA, p)
-            f0, f1, f2 = _xtf(X, i, pa0, pa1, pa2)
-            pA[p, 0] += f0
-            pA[p, 1] += f1
-            pA[p, 2] += f2
+            # IA[p] += Xᵀ Ia X and pA[p] += Xᵀ pa, written out (no helper calls in branches)
+            c, s, x10, x20 = X[i, 0], X[i, 1], X[i, 2], X[i, 3]
+            c00 = a00 + a01 * x10 + a02 * x20    # C = Ia X
+            c01 = a01 * c - a02 * s
+            c02 = a01 * s + a02 * c
+            c10 = a01 + a11 * x10 + a12 * x20
+            c11 = a11 * c - a12 * s
+            c12 = a11 * s + a12 * c
+            c20 = a02 + a12 * x10 + a22 * x20
+            c21 = a12 * c - a22 * s
+            c22 = a12 * s + a22 * c
+            IA[p, 0] += c00 + x10 * c10 + x20 * c20    # Xᵀ C
+            IA[p, 1] += c01 + x10 * c11 + x20 * c21
+            IA[p, 2] += c02 + x10 * c12 + x20 * c22
+            IA[p, 3] += c * c11 - s * c21
+            IA[p, 4] += c * c12 - s * c22
+            IA[p, 5] += s * c12 + c * c22
+            pA[p, 0] += pa0 + x10 * pa1 + x20 * pa2
+            pA[p, 1] += c * pa1 - s * pa2
+            pA[p, 2] += s * pa1 + c * pa2
     for i in range(nl):
-        p = parent[i]
-        if p >= 0:
-            ap0, ap1, ap2 = a[p, 0], a[p, 1], a[p, 2]
-        else:
+        p = M.parent[i]
+        k = M.jtype[i]
+        pp = p if p >= 0 else 0
+        ap0, ap1, ap2 = a[pp, 0], a[pp, 1], a[pp, 2]
+        if p < 0:
             ap0, ap1, ap2 = 0.0, 0.0, gravity  # fictitious base acceleration
-        a0, a1, a2 = _xm(X, i, ap0, ap1, ap2)
-        a0 += cbias[i, 0]
-        a1 += cbias[i, 1]
-        a2 += cbias[i, 2]
-        k = jtype[i]
+        c, s, x10, x20 = X[i, 0], X[i, 1], X[i, 2], X[i, 3]
+        a0 = ap0 + cbias[i, 0]
+        a1 = x10 * ap0 + c * ap1 + s * ap2 + cbias[i, 1]
+        a2 = x20 * ap0 - s * ap1 + c * ap2 + cbias[i, 2]
+        i00, i01, i02, i11, i12, i22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
+        pr, w, ti = presc[i], presc_qdd[i], tau[i]
         if k == 0:
-            u0, u1, u2, d = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 0]
+            u0, u1, u2, d, pk = i00, i01, i02, i00, pA[i, 0]
         elif k == 1:
-            u0, u1, u2, d = IA[i, 1], IA[i, 3], IA[i, 4], IA[i, 3]
+            u0, u1, u2, d, pk = i01, i11, i12, i11, pA[i, 1]
         else:
-            u0, u1, u2, d = IA[i, 2], IA[i, 4], IA[i, 5], IA[i, 5]
-        if presc[i]:
-            acc = presc_qdd[i]
+            u0, u1, u2, d, pk = i02, i12, i22, i22, pA[i, 2]
+        if pr:
+            acc = w
         else:
-            acc = (tau[i] - pA[i, k] - (u0 * a0 + u1 * a1 + u2 * a2)) / d
+            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) / d
         qdd[i] = acc
         if k == 0:
             a0 += acc
@@ -243,8 +221,9 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         else:
             a2 += acc
         a[i, 0], a[i, 1], a[i, 2] = a0, a1, a2
-        if presc[i]:
-            tau[i] = u0 * a0 + u1 * a1 + u2 * a2 + pA[i, k]
+        if pr:
+            ti = u0 * a0 + u1 * a1 + u2 * a2 + pk
+        tau[i] = ti
 
 
 @njit(**_INLINE)
@@ -284,7 +263,7 @@ def apply_point_force(cs, fext, link, px, pz, fx, fz):
     fext[link, 2] += lz
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     """Penalty ground contact with a stick–slip friction anchor per point.
 
@@ -292,16 +271,17 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     spring to the point where contact began (so a figure at rest does not
     creep), clamped at μ·Fn; when it slips the anchor is dragged along.
     """
-    cp_link, cp_pos, fixed = M.cp_link, M.cp_pos, M.fixed_pose
-    fth, fx, fz = fixed[0], fixed[1], fixed[2]
+    # numba: a Model field read inside a branch defeats reference-count
+    # pruning (~0.1 µs per call); read such fields up front, as scalars
+    fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
     ground, ground_z, k_ground, c_ground = S.ground, S.ground_z, S.k_ground, S.c_ground
     k_tangent, c_tangent, mu = S.k_tangent, S.c_tangent, S.mu
-    for k in range(cp_link.shape[0]):
+    for k in range(M.cp_link.shape[0]):
         cforce[k] = 0.0
         if ground == 0:
             continue
-        link = cp_link[k]
-        px, pz = cp_pos[k, 0], cp_pos[k, 1]
+        link = M.cp_link[k]
+        px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
         if link >= 0:
             x, z = point_world(pose, cs, link, px, pz)
         else:
@@ -329,20 +309,22 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
 @njit(**_JIT)
 def pole_contacts(M, S, pose, cs, v, fext):
     """Capsule–pole penalty contact (frictionless); returns the deepest penetration."""
-    seg_link, seg_a, seg_b, seg_r, fixed = M.seg_link, M.seg_a, M.seg_b, M.seg_r, M.fixed_pose
-    fth, fx, fz = fixed[0], fixed[1], fixed[2]
-    poles, k_pole, c_pole = S.poles, S.k_pole, S.c_pole
+    # numba: no early return and no Model reads in branches (reference-count pruning)
+    fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
+    k_pole, c_pole = S.k_pole, S.c_pole
     deepest = 0.0
-    for j in range(poles.shape[0]):
-        cx, cz, rp = poles[j, 0], poles[j, 1], poles[j, 2]
-        for g in range(seg_link.shape[0]):
-            link = seg_link[g]
+    for j in range(S.poles.shape[0]):
+        cx, cz, rp = S.poles[j, 0], S.poles[j, 1], S.poles[j, 2]
+        for g in range(M.seg_link.shape[0]):
+            link = M.seg_link[g]
+            sax, saz, sbx, sbz = M.seg_a[g, 0], M.seg_a[g, 1], M.seg_b[g, 0], M.seg_b[g, 1]
+            r = M.seg_r[g]
             if link >= 0:
-                ax, az = point_world(pose, cs, link, seg_a[g, 0], seg_a[g, 1])
-                bx, bz = point_world(pose, cs, link, seg_b[g, 0], seg_b[g, 1])
+                ax, az = point_world(pose, cs, link, sax, saz)
+                bx, bz = point_world(pose, cs, link, sbx, sbz)
             else:
-                ax, az = fixed_point_world(fth, fx, fz, seg_a[g, 0], seg_a[g, 1])
-                bx, bz = fixed_point_world(fth, fx, fz, seg_b[g, 0], seg_b[g, 1])
+                ax, az = fixed_point_world(fth, fx, fz, sax, saz)
+                bx, bz = fixed_point_world(fth, fx, fz, sbx, sbz)
             dx, dz = bx - ax, bz - az
             L2 = dx * dx + dz * dz
             t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
@@ -350,13 +332,13 @@ def pole_contacts(M, S, pose, cs, v, fext):
             qx, qz = ax + t * dx, az + t * dz
             ex, ez = qx - cx, qz - cz
             dist = np.sqrt(ex * ex + ez * ez)
-            pen = seg_r[g] + rp - dist
+            pen = r + rp - dist
             if pen <= 0.0 or dist == 0.0:
                 continue
             deepest = max(deepest, pen)
             nx, nz = ex / dist, ez / dist
-            lx = seg_a[g, 0] + t * (seg_b[g, 0] - seg_a[g, 0])
-            lz = seg_a[g, 1] + t * (seg_b[g, 1] - seg_a[g, 1])
+            lx = sax + t * (sbx - sax)
+            lz = saz + t * (sbz - saz)
             vx, vz = point_velocity(cs, v, link, lx, lz)
             fn = k_pole * pen - c_pole * (vx * nx + vz * nz)
             if fn > 0.0:
@@ -364,44 +346,43 @@ def pole_contacts(M, S, pose, cs, v, fext):
     return deepest
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
     """Passive damping, joint limits, then PD servos or kinematic responses."""
-    damping, lo, hi, limit_k, limit_c = M.damping, M.lo, M.hi, M.limit_k, M.limit_c
-    act_dof, neutral, kp, kd, tau_max = M.act_dof, M.neutral, M.kp, M.kd, M.tau_max
+    limit_k, limit_c = M.limit_k, M.limit_c
     for i in range(q.shape[0]):
-        tau[i] = -damping[i] * qd[i]
+        tau[i] = -M.damping[i] * qd[i]
         presc[i] = 0
+        lo, hi = M.lo[i], M.hi[i]
         # a limit is a unilateral spring-damper: it pushes back, never pulls
-        if q[i] < lo[i]:
-            tau[i] += max(0.0, limit_k * (lo[i] - q[i]) - limit_c * qd[i])
-        elif q[i] > hi[i]:
-            tau[i] += min(0.0, limit_k * (hi[i] - q[i]) - limit_c * qd[i])
-    for a in range(act_dof.shape[0]):
-        i = act_dof[a]
-        target = targets[a]
+        if q[i] < lo:
+            tau[i] += max(0.0, limit_k * (lo - q[i]) - limit_c * qd[i])
+        elif q[i] > hi:
+            tau[i] += min(0.0, limit_k * (hi - q[i]) - limit_c * qd[i])
+    for a in range(M.act_dof.shape[0]):
+        i = M.act_dof[a]
+        target, neutral, lo, hi = targets[a], M.neutral[a], M.lo[i], M.hi[i]
+        kp, kd, tau_max = M.kp[a], M.kd[a], M.tau_max[a]
         if not np.isfinite(target):  # a controller's NaN must not poison the physics
-            target = neutral[a]
-        target = min(hi[i], max(lo[i], target))
+            target = neutral
+        target = min(hi, max(lo, target))
         if actuation == 0:
-            u = kp[a] * (target - q[i]) - kd[a] * qd[i]
-            tau[i] += min(tau_max[a], max(-tau_max[a], u))
+            u = kp * (target - q[i]) - kd * qd[i]
+            tau[i] += min(tau_max, max(-tau_max, u))
         else:
             tc = max(taus[a], 2.0 * dt)
             presc[i] = 1
             presc_qdd[i] = (target - q[i] - 2.0 * tc * qd[i]) / (tc * tc)
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def centre_of_mass(M, pose, cs, v, com):
     """com = (x, z, vx, vz) of the moving links (a fixed root body is excluded)."""
-    mass, lcom = M.mass, M.com
     mt = sx = sz = svx = svz = 0.0
-    for i in range(mass.shape[0]):
-        m = mass[i]
+    for i in range(M.mass.shape[0]):
+        m, cx, cz = M.mass[i], M.com[i, 0], M.com[i, 1]
         if m == 0.0:
             continue
-        cx, cz = lcom[i, 0], lcom[i, 1]
         x, z = point_world(pose, cs, i, cx, cz)
         vx, vz = point_velocity(cs, v, i, cx, cz)
         mt += m
@@ -431,7 +412,7 @@ def mechanical_energy(M, S, q, qd, pose, cs, v):
     return ke + pe
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def integrate(q, qd, qdd, dt, limit):
     """Semi-implicit Euler; returns False when the state is non-finite or absurd."""
     ok = True

@@ -41,25 +41,25 @@ def sense_layout(actuators, contacts, lo, hi, total_mass, overrides):
     return names, np.array(los), np.array(his)
 
 
-@njit(cache=True, error_model="numpy", boundscheck=False)
+@njit(cache=True, error_model="numpy", boundscheck=False, inline="always")
 def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_norm):
     """Fill ``senses`` and ``senses_norm`` from the current kinematic state.
 
     ``pose[i] = (θ, x, z)`` world pose of link i, ``cs[i] = (cos θ, sin θ)``,
     ``v[i]`` its spatial velocity in link coordinates, ``com = (x, z, vx, vz)``.
     """
-    # Model fields are read once, up front: a field read inside a branch
-    # defeats numba's reference-count pruning and costs ~0.1 µs per call
-    b, fixed, act_dof, lo, hi = M.base_link, M.fixed_pose, M.act_dof, M.sense_lo, M.sense_hi
-    if b >= 0:
-        th, x, z = pose[b, 0], pose[b, 1], pose[b, 2]
-        c, s = cs[b, 0], cs[b, 1]
-        vx = c * v[b, 1] - s * v[b, 2]
-        vz = s * v[b, 1] + c * v[b, 2]
-        w = v[b, 0]
-    else:
-        th, x, z = fixed[0], fixed[1], fixed[2]
-        vx = vz = w = 0.0
+    # numba: an array read inside an if/else here defeats reference-count
+    # pruning (~0.3 µs per call): read unconditionally, branch on scalars only
+    b = M.base_link
+    fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
+    bb = max(b, 0)
+    th, x, z = pose[bb, 0], pose[bb, 1], pose[bb, 2]
+    c, s = cs[bb, 0], cs[bb, 1]
+    w, v1, v2 = v[bb, 0], v[bb, 1], v[bb, 2]
+    vx = c * v1 - s * v2
+    vz = s * v1 + c * v2
+    if b < 0:                       # a fixed root: the base does not move
+        th, x, z, vx, vz, w = fth, fx, fz, 0.0, 0.0, 0.0
     senses[0] = x - goal[0]
     senses[1] = z - goal[1]
     senses[2] = vx
@@ -69,13 +69,15 @@ def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_n
     senses[6] = com[1]
     senses[7] = com[3]
     senses[8] = t
-    na = act_dof.shape[0]
+    na = M.act_dof.shape[0]
     for a in range(na):
-        senses[9 + a] = q[act_dof[a]]
-        senses[9 + na + a] = qd[act_dof[a]]
+        i = M.act_dof[a]
+        senses[9 + a] = q[i]
+        senses[9 + na + a] = qd[i]
     for k in range(cforce.shape[0]):
         senses[9 + 2 * na + k] = cforce[k]
     for k in range(senses.shape[0]):
-        span = hi[k] - lo[k]
-        y = (senses[k] - lo[k]) / span if span > 0 else 0.5
+        lo, hi = M.sense_lo[k], M.sense_hi[k]
+        span = hi - lo
+        y = (senses[k] - lo) / span if span > 0 else 0.5
         senses_norm[k] = min(1.0, max(0.0, y))
