@@ -12,18 +12,29 @@ numbers ``(c, s, X10, X20)`` of its matrix
 Every link has one degree of freedom with motion subspace S = e_k
 (k = 0 hinge, 1 slide-x, 2 slide-z), so products with S are indexing.
 
-Speed notes (the step loop of the rollout runs these millions of times):
+Speed notes (the step loop of the rollout runs these millions of times;
+measure with ``gpmotion bench`` / ``benchmarks/bench_sim.py``):
 
 * ``kinematics`` also fills ``cs[i] = (cos θ_i, sin θ_i)`` of every link's
   world angle, composed from the parent's and the joint's (one sin/cos pair
   per hinge per step); contacts, centre of mass and senses read ``cs``
   instead of calling the trig functions again;
+* the step-loop kernels are ``inline="always"`` (numba IR inlining into the
+  generated episode kernel); ``pole_contacts`` is a plain call, made only
+  when the scene has poles;
+* numba reference counting: a function that receives the ``Model`` tuple
+  increfs/decrefs every array in it (atomic operations, ~0.1–0.3 µs per
+  call) unless numba's refcount pruning removes the pairs — and pruning
+  fails when arrays are read, or array-taking helpers are called, inside an
+  ``if``/``else`` or behind an early ``return``.  So: read Model/Scene fields
+  up front as scalars or inside plain loop bodies, branch on scalars only;
 * articulated inertias are symmetric and kept packed, six numbers per link
-  ``(I00, I01, I02, I11, I12, I22)``; the ABA works in scalars;
+  ``(I00, I01, I02, I11, I12, I22)``; the ABA works in scalars, one division
+  per link and pass;
 * kernels are allocation-free and compiled with ``error_model="numpy"`` (a
   division by zero gives inf/NaN, which the divergence check catches, instead
   of a branch and an exception).  No ``fastmath``: ``integrate`` relies on
-  NaN comparisons.
+  NaN comparisons (and FMA contraction measured no gain).
 
 The plain-numpy twins live in ``tests/reference/planar_ref.py``.
 """
