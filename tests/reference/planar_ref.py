@@ -170,3 +170,46 @@ def momentum(M, q, qd):
 def ground_force(k, c, mu, pen, vz):
     """Normal force of one penalty contact (never pulls)."""
     return max(0.0, k * pen - c * vz) if pen > 0 else 0.0
+
+
+def rot(th):
+    c, s = np.cos(th), np.sin(th)
+    return np.array([[c, -s], [s, c]])
+
+
+def ground_contacts(M, S, q, qd, anchor, touching):
+    """Penalty ground contact with a stick–slip friction anchor, the plain way.
+
+    Returns ``(fext [nl, 3] spatial forces in link coordinates, cforce [nc],
+    anchor, touching)``; ``anchor`` and ``touching`` are updated copies.
+    """
+    pose, v = poses_and_velocities(M, q, qd)
+    anchor, touching = np.array(anchor, float), np.array(touching, float)
+    fext, cforce = np.zeros((len(q), 3)), np.zeros(len(M.cp_link))
+    for k, (link, p) in enumerate(zip(M.cp_link, M.cp_pos)):
+        if not S.ground:
+            continue
+        th, x, z = pose[link] if link >= 0 else M.fixed_pose
+        R = rot(th)
+        x, z = np.array([x, z]) + R @ p
+        pen = S.ground_z - z
+        if pen <= 0:
+            touching[k] = 0.0
+            continue
+        if link >= 0:       # v = (ω, v_origin) in link coordinates; point velocity ω × p
+            w = v[link, 0]
+            vx, vz = R @ (v[link, 1:] + w * np.array([-p[1], p[0]]))
+        else:
+            vx = vz = 0.0
+        fn = max(0.0, S.k_ground * pen - S.c_ground * vz)
+        if touching[k] == 0.0:
+            anchor[k], touching[k] = x, 1.0
+        ft = -S.k_tangent * (x - anchor[k]) - S.c_tangent * vx
+        if abs(ft) > S.mu * fn:
+            ft = np.sign(ft) * S.mu * fn
+            anchor[k] = x + (ft + S.c_tangent * vx) / S.k_tangent if S.k_tangent > 0 else x
+        cforce[k] = fn
+        if link >= 0:
+            f = R.T @ np.array([ft, fn])                     # force in link coordinates
+            fext[link] += (p[0] * f[1] - p[1] * f[0], f[0], f[1])   # moment about the origin
+    return fext, cforce, anchor, touching
