@@ -51,6 +51,56 @@ class Model(NamedTuple):
     sense_hi: np.ndarray
 
 
+# ---- 3-D figures (gpmotion.sim.spatial3d) ---------------------------------
+# link types of the 3-D kernel
+HINGE3D, SLIDE3D, FREE3D = 0, 1, 2
+
+
+class Model3D(NamedTuple):
+    """Arrays of a 3-D figure (order parents-first); see gpmotion/sim/spatial3d.py.
+
+    Every link has one dof (hinge about / slide along ``axis`` of its joint
+    frame) except a ``free`` root, link 0: 6 dofs, q = (x, y, z, qw, qx, qy, qz),
+    q̇ = (ω_body, v_body).  Per-dof arrays (``lo``, ``hi``, ``damping``) have nv
+    entries; ``qadr``/``dadr`` give each link's first q / q̇ index.
+    """
+    parent: np.ndarray      # int64[nl]   parent link or -1 (world)
+    jtype: np.ndarray       # int64[nl]   HINGE3D / SLIDE3D / FREE3D
+    axis: np.ndarray        # float64[nl, 3]  unit joint axis in the joint frame
+    xrot: np.ndarray        # float64[nl, 3, 3]  joint frame → parent coordinates
+    xpos: np.ndarray        # float64[nl, 3]     joint frame origin in the parent
+    qadr: np.ndarray        # int64[nl]
+    dadr: np.ndarray        # int64[nl]
+    mass: np.ndarray        # float64[nl]
+    com: np.ndarray         # float64[nl, 3]     centre of mass in link frame
+    icom: np.ndarray        # float64[nl, 3, 3]  inertia about the com, link frame
+    lo: np.ndarray          # float64[nv]  joint limits (±inf when free)
+    hi: np.ndarray
+    damping: np.ndarray     # float64[nv]
+    act_dof: np.ndarray     # int64[na]   velocity index of each actuator
+    act_q: np.ndarray       # int64[na]   configuration index of each actuator
+    kp: np.ndarray          # float64[na]
+    kd: np.ndarray
+    tau_max: np.ndarray
+    neutral: np.ndarray     # float64[na]
+    cp_link: np.ndarray     # int64[nc]   contact points (-1: fixed root body)
+    cp_pos: np.ndarray      # float64[nc, 3]
+    seg_link: np.ndarray    # int64[ns]
+    seg_a: np.ndarray       # float64[ns, 3]
+    seg_b: np.ndarray
+    seg_r: np.ndarray       # float64[ns]
+    fixed_rot: np.ndarray   # float64[3, 3]  orientation of a fixed root body
+    fixed_pos: np.ndarray   # float64[3]     its position
+    base_link: int          # link whose frame is "the base" (-1: fixed root)
+    limit_k: float
+    limit_c: float
+    sense_lo: np.ndarray
+    sense_hi: np.ndarray
+    nq: int
+    nv: int
+# ---- end 3-D ---------------------------------------------------------------
+
+
 class Scene(NamedTuple):
     """World settings shared by every episode of a rollout."""
     gravity: float          # m/s², acting along −z
@@ -90,7 +140,7 @@ class Figure:
     """A compiled figure: the Model plus names for people and tasks."""
     name: str
     model: Model
-    root: str                       # "planar" or "fixed"
+    root: str                       # "planar" or "fixed" (3-D also "free")
     link_names: list[str]           # per dof
     actuator_names: list[str]       # joint names of actuated hinges
     contact_names: list[str]
@@ -106,7 +156,21 @@ class Figure:
 
     @property
     def nq(self) -> int:
+        """Length of the configuration q (a 3-D free root has nq = nv + 1)."""
+        if isinstance(self.model, Model3D):
+            return int(self.model.nq)
         return len(self.model.parent)
+
+    @property
+    def nv(self) -> int:
+        """Length of the velocity q̇ (equals nq for planar figures)."""
+        if isinstance(self.model, Model3D):
+            return int(self.model.nv)
+        return len(self.model.parent)
+
+    @property
+    def dimensions(self) -> int:
+        return 3 if isinstance(self.model, Model3D) else 2
 
     @property
     def n_act(self) -> int:

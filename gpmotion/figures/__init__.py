@@ -5,6 +5,7 @@ from pathlib import Path
 
 from ..model import Figure
 from .spec import SpecError, compile_spec, load_spec
+from .spec3d import compile_spec3d, planar_spec_to_3d
 
 _HERE = Path(__file__).parent
 _REGISTRY: dict[str, Path | dict] = {p.stem: p for p in sorted(_HERE.glob("*.toml"))}
@@ -42,4 +43,5 @@ def load_figure(name_or_spec) -> Figure:
     return fig
 
 
-__all__ = ["SpecError", "compile_spec", "load_spec", "load_figure", "register_figure", "figure_names"]
+__all__ = ["SpecError", "compile_spec", "compile_spec3d", "load_spec", "load_figure",
+           "planar_spec_to_3d", "register_figure", "figure_names"]

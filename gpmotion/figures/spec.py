@@ -158,6 +158,13 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     from ..sim.senses import sense_layout
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
+    # ---- 3-D figures: `dimensions = 3` specs compile in spec3d ----
+    dims = spec.get("dimensions", 2)
+    if dims not in (2, 3) or isinstance(dims, bool):
+        raise SpecError(f"figure: 'dimensions' must be 2 or 3, got {dims!r}")
+    if dims == 3:
+        from .spec3d import compile_spec3d
+        return compile_spec3d(spec, sense_ranges)
     name = spec.get("name")
     if not isinstance(name, str) or not name:
         raise SpecError("figure: needs a 'name'")

@@ -319,9 +319,13 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
 
 @njit(**_JIT)
 def pole_contacts(M, S, pose, cs, v, fext):
-    """Capsule–pole penalty contact (frictionless); returns the deepest penetration."""
-    # numba: no early return and no Model reads in branches (reference-count pruning)
+    """Capsule–pole penalty contact (frictionless); returns the deepest penetration.
+
+    Written branch-free around array accesses (a capsule out of contact adds
+    a zero force) so that numba's reference-count pruning succeeds.
+    """
     fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
+    fc, fs = np.cos(fth), np.sin(fth)
     k_pole, c_pole = S.k_pole, S.c_pole
     deepest = 0.0
     for j in range(S.poles.shape[0]):
@@ -330,12 +334,14 @@ def pole_contacts(M, S, pose, cs, v, fext):
             link = M.seg_link[g]
             sax, saz, sbx, sbz = M.seg_a[g, 0], M.seg_a[g, 1], M.seg_b[g, 0], M.seg_b[g, 1]
             r = M.seg_r[g]
-            if link >= 0:
-                ax, az = point_world(pose, cs, link, sax, saz)
-                bx, bz = point_world(pose, cs, link, sbx, sbz)
-            else:
-                ax, az = fixed_point_world(fth, fx, fz, sax, saz)
-                bx, bz = fixed_point_world(fth, fx, fz, sbx, sbz)
+            li = max(link, 0)
+            c, s, ox, oz = cs[li, 0], cs[li, 1], pose[li, 1], pose[li, 2]
+            w, v1, v2 = v[li, 0], v[li, 1], v[li, 2]
+            moving = link >= 0
+            if not moving:                     # a fixed root body
+                c, s, ox, oz, w, v1, v2 = fc, fs, fx, fz, 0.0, 0.0, 0.0
+            ax, az = ox + c * sax - s * saz, oz + s * sax + c * saz
+            bx, bz = ox + c * sbx - s * sbz, oz + s * sbx + c * sbz
             dx, dz = bx - ax, bz - az
             L2 = dx * dx + dz * dz
             t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
@@ -344,16 +350,24 @@ def pole_contacts(M, S, pose, cs, v, fext):
             ex, ez = qx - cx, qz - cz
             dist = np.sqrt(ex * ex + ez * ez)
             pen = r + rp - dist
-            if pen <= 0.0 or dist == 0.0:
-                continue
-            deepest = max(deepest, pen)
-            nx, nz = ex / dist, ez / dist
+            hit = pen > 0.0 and dist != 0.0
+            if hit:
+                deepest = max(deepest, pen)
+            inv = 1.0 / dist if hit else 0.0
+            nx, nz = ex * inv, ez * inv
             lx = sax + t * (sbx - sax)
             lz = saz + t * (sbz - saz)
-            vx, vz = point_velocity(cs, v, link, lx, lz)
+            # world velocity of the closest point
+            plx, plz = v1 - w * lz, v2 + w * lx
+            vx, vz = c * plx - s * plz, s * plx + c * plz
             fn = k_pole * pen - c_pole * (vx * nx + vz * nz)
-            if fn > 0.0:
-                apply_point_force(cs, fext, link, lx, lz, fn * nx, fn * nz)
+            if not (hit and moving and fn > 0.0):
+                fn = 0.0
+            fwx, fwz = fn * nx, fn * nz
+            flx, flz = c * fwx + s * fwz, -s * fwx + c * fwz
+            fext[li, 0] += lx * flz - lz * flx
+            fext[li, 1] += flx
+            fext[li, 2] += flz
     return deepest
 
 

@@ -1,0 +1,120 @@
+"""Forward kinematics in numpy for 3-D figures over recorded frames.
+
+Shapes: ``q[..., nq]`` → link rotations ``[..., nl, 3, 3]`` (columns = link
+axes in world) and origins ``[..., nl, 3]``; ``link_poses`` packs them as
+4×4 homogeneous transforms.  Link −1 is the fixed root body.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import FREE3D, HINGE3D
+
+
+def quat_to_rot(qv: np.ndarray) -> np.ndarray:
+    """Rotation matrices [..., 3, 3] of quaternions (w, x, y, z) [..., 4] (normalized here)."""
+    qv = np.asarray(qv, dtype=np.float64)
+    qv = qv / np.linalg.norm(qv, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(qv, -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def axis_angle(axis, angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices [..., 3, 3] about a unit axis by angles [...] (Rodrigues)."""
+    a = np.asarray(axis, dtype=np.float64)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    c, s = np.cos(angle)[..., None, None], np.sin(angle)[..., None, None]
+    return c * np.eye(3) + s * K + (1 - c) * np.outer(a, a)
+
+
+def link_frames(model, q: np.ndarray):
+    """World rotation [..., nl, 3, 3] and origin [..., nl, 3] of every link."""
+    q = np.asarray(q, dtype=np.float64)
+    lead = q.shape[:-1]
+    nl = len(model.parent)
+    R = np.zeros(lead + (nl, 3, 3))
+    P = np.zeros(lead + (nl, 3))
+    for i in range(nl):
+        qa, p, jt = int(model.qadr[i]), int(model.parent[i]), int(model.jtype[i])
+        if jt == FREE3D:
+            R[..., i, :, :] = quat_to_rot(q[..., qa + 3:qa + 7])
+            P[..., i, :] = q[..., qa:qa + 3]
+            continue
+        ax = model.axis[i]
+        if jt == HINGE3D:
+            Rrel = model.xrot[i] @ axis_angle(ax, q[..., qa])
+            rrel = np.broadcast_to(model.xpos[i], lead + (3,))
+        else:
+            Rrel = np.broadcast_to(model.xrot[i], lead + (3, 3))
+            rrel = model.xpos[i] + q[..., qa, None] * (model.xrot[i] @ ax)
+        if p >= 0:
+            R[..., i, :, :] = R[..., p, :, :] @ Rrel
+            P[..., i, :] = P[..., p, :] + np.einsum("...ab,...b->...a", R[..., p, :, :], rrel)
+        else:
+            R[..., i, :, :] = Rrel
+            P[..., i, :] = rrel
+    return R, P
+
+
+def link_poses(model, q: np.ndarray) -> np.ndarray:
+    """World transforms [..., nl, 4, 4] of every link."""
+    R, P = link_frames(model, q)
+    T = np.zeros(R.shape[:-2] + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = P
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def points_world(model, R, P, links, local) -> np.ndarray:
+    """World (x, y, z) [..., n, 3] of link-frame points ``local[n, 3]`` on ``links[n]``."""
+    links = np.asarray(links, dtype=np.int64)
+    local = np.asarray(local, dtype=np.float64).reshape(-1, 3)
+    lead = R.shape[:-3]
+    Rf = np.broadcast_to(model.fixed_rot, lead + (1, 3, 3))
+    Pf = np.broadcast_to(model.fixed_pos, lead + (1, 3))
+    Re = np.concatenate([R, Rf], axis=-3)   # index −1 → the fixed root body
+    Pe = np.concatenate([P, Pf], axis=-2)
+    return Pe[..., links, :] + np.einsum("...nab,nb->...na", Re[..., links, :, :], local)
+
+
+def sites_world(figure, q) -> np.ndarray:
+    R, P = link_frames(figure.model, q)
+    return points_world(figure.model, R, P, figure.site_link, figure.site_pos)
+
+
+def segments_world(model, q: np.ndarray) -> np.ndarray:
+    """Capsule end points [..., n_seg, 2 (a/b), 3 (x/y/z)] for drawing and checks."""
+    R, P = link_frames(model, q)
+    a = points_world(model, R, P, model.seg_link, model.seg_a)
+    b = points_world(model, R, P, model.seg_link, model.seg_b)
+    return np.stack([a, b], axis=-2)
+
+
+def base_pose(model, q: np.ndarray) -> np.ndarray:
+    """Base (root body) pose [..., 7] = (x, y, z, qw, qx, qy, qz)."""
+    from ..figures.spec3d import rot_to_quat
+    q = np.asarray(q, dtype=np.float64)
+    b = model.base_link
+    if b < 0:
+        pose = np.concatenate([model.fixed_pos, rot_to_quat(model.fixed_rot)])
+        return np.broadcast_to(pose, q.shape[:-1] + (7,)).copy()
+    if model.jtype[b] == FREE3D:
+        qa = int(model.qadr[b])
+        return q[..., qa:qa + 7].copy()
+    R, P = link_frames(model, q)
+    Rb = R[..., b, :, :].reshape(-1, 3, 3)
+    quats = np.array([rot_to_quat(r) for r in Rb]).reshape(q.shape[:-1] + (4,))
+    return np.concatenate([P[..., b, :], quats], axis=-1)
+
+
+def euler_angles(Rm: np.ndarray) -> np.ndarray:
+    """(roll, pitch, yaw) [..., 3] with R = Rz(yaw)·Ry(−pitch)·Rx(roll) (pitch nose-up,
+    the planar CCW convention; the same as the kernel's senses)."""
+    roll = np.arctan2(Rm[..., 2, 1], Rm[..., 2, 2])
+    pitch = np.arcsin(np.clip(Rm[..., 2, 0], -1, 1))
+    yaw = np.arctan2(Rm[..., 1, 0], Rm[..., 0, 0])
+    return np.stack([roll, pitch, yaw], -1)
