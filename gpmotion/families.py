@@ -80,7 +80,10 @@ class BSRFamily(Family):
     default_actuation = "kinematic"
     kind = ""
 
-    def __init__(self, task: Task, rules=None, bsr_dt=0.01, **options):
+    # Table 2's τ range is [2Δt, T/4]; Δt here is the controller tick.  At
+    # 50 ms, τ ≥ 0.1 s: kinematic joints have unlimited torque, and the paper
+    # (footnote 2) restricts τ to ranges that give acceptable behaviour.
+    def __init__(self, task: Task, rules=None, bsr_dt=0.05, **options):
         super().__init__(task, rules=rules, bsr_dt=bsr_dt, **options)
         self.limits = task.fig.actuator_limits()
         if not np.all(np.isfinite(self.limits)):

@@ -14,8 +14,9 @@ import numpy as np
 
 from .. import cache
 from ..controllers import ControllerBatch
-from ..model import KINEMATIC, PD, Figure, Scene, make_scene
-from . import geometry
+from ..model import KINEMATIC, PD, Figure, Model3D, Scene, make_scene
+from . import geometry, geometry3d
+from .episode3d_template import TEMPLATE3D
 from .episode_template import TEMPLATE
 
 _HERE = Path(__file__).parent
@@ -23,15 +24,19 @@ _SIM_SOURCES = [_HERE / "planar.py", _HERE / "senses.py", _HERE / "episode_templ
                 _HERE.parent / "cache.py"]
 DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
 ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
+# ---- 3-D figures (Model3D) run the kernel generated from episode3d_template ----
+_SIM3D_SOURCES = [_HERE / "spatial3d.py", _HERE / "episode3d_template.py", _HERE.parent / "cache.py"]
 
 
-def kernel_for(control_module: str):
+def kernel_for(control_module: str, dimensions: int = 2):
     """Import (generating if needed) the rollout kernel for a controller module."""
     ctrl_src = Path(control_module).read_bytes()
-    key = cache.digest(cache.file_digest(*_SIM_SOURCES), ctrl_src, numba.__version__,
+    sources, template, stem = ((_SIM_SOURCES, TEMPLATE, "rollout") if dimensions == 2 else
+                               (_SIM3D_SOURCES, TEMPLATE3D, "rollout3d"))
+    key = cache.digest(cache.file_digest(*sources), ctrl_src, numba.__version__,
                        str(Path(control_module).resolve()))
-    path = cache.write_module(f"rollout_{key}",
-                              TEMPLATE.format(CONTROL_MODULE=str(Path(control_module).resolve())))
+    path = cache.write_module(f"{stem}_{key}",
+                              template.format(CONTROL_MODULE=str(Path(control_module).resolve())))
     return cache.import_file(path)
 
 
@@ -42,6 +47,12 @@ class Trajectory:
     Shapes: ``[E, F, ...]`` for E episodes and F frames.  Event channels
     (contact_force, pole_hit, impact, energy) hold the max (sum for energy)
     over the steps since the previous frame.
+
+    3-D figures (``figure.dimensions == 3``): ``q`` holds the configuration
+    (nq: a free root's position and quaternion first), ``qd`` the velocity
+    (nv), ``com`` is [E, F, 6] (x, y, z, vx, vy, vz); ``poses()`` gives 4×4
+    link transforms, ``base()`` (x, y, z, qw, qx, qy, qz), ``sites()`` and
+    ``segments()`` 3-vectors.
     """
     figure: Figure
     scene: Scene
@@ -49,8 +60,8 @@ class Trajectory:
     record_every: int
     times: np.ndarray          # [F]
     q: np.ndarray              # [E, F, nq]
-    qd: np.ndarray             # [E, F, nq]
-    com: np.ndarray            # [E, F, 4]  x, z, vx, vz
+    qd: np.ndarray             # [E, F, nv]  (nv = nq for planar figures)
+    com: np.ndarray            # [E, F, 4]  x, z, vx, vz  (3-D: [E, F, 6] x, y, z, vx, vy, vz)
     contact_force: np.ndarray  # [E, F, nc] max ground normal force per contact point
     pole_hit: np.ndarray       # [E, F]     max penetration into any pole (m)
     impact: np.ndarray         # [E, F]     max total ground normal force (N)
@@ -73,24 +84,37 @@ class Trajectory:
                        senses=None if self.senses is None else self.senses[sl],
                        diverged=self.diverged[sl], diverged_step=self.diverged_step[sl])
 
+    @property
+    def is3d(self) -> bool:
+        return isinstance(self.figure.model, Model3D)
+
     def poses(self) -> np.ndarray:
+        """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms."""
+        if self.is3d:
+            return geometry3d.link_poses(self.figure.model, self.q)
         return geometry.link_poses(self.figure.model, self.q)
 
     def base(self) -> np.ndarray:
-        """Base (root body) pose [E, F, 3] = (pitch, x, z)."""
+        """Base (root body) pose [E, F, 3] = (pitch, x, z); 3-D: [E, F, 7] (x, y, z, qw, qx, qy, qz)."""
         m = self.figure.model
+        if self.is3d:
+            return geometry3d.base_pose(m, self.q)
         if m.base_link < 0:
             return np.broadcast_to(m.fixed_pose, self.q.shape[:2] + (3,)).copy()
         return self.poses()[..., m.base_link, :]
 
     def sites(self) -> np.ndarray:
         f = self.figure
+        if self.is3d:
+            return geometry3d.sites_world(f, self.q)
         return geometry.points_world(f.model, self.poses(), f.site_link, f.site_pos)
 
     def site(self, name: str) -> np.ndarray:
         return self.sites()[..., self.figure.site_names.index(name), :]
 
     def segments(self) -> np.ndarray:
+        if self.is3d:
+            return geometry3d.segments_world(self.figure.model, self.q)
         return geometry.segments_world(self.figure.model, self.q)
 
     def sense(self, name: str) -> np.ndarray:
@@ -103,7 +127,8 @@ def _batch_state(x, n, nq, default, what):
     x = default if x is None else np.asarray(x, dtype=np.float64)
     x = np.atleast_2d(x)
     if x.shape[-1] != nq:
-        raise ValueError(f"{what} must have {nq} entries (one per dof), got {x.shape[-1]}")
+        raise ValueError(f"{what} must have {nq} entries (one per "
+                         f"{'coordinate' if what == 'q0' else 'dof'}), got {x.shape[-1]}")
     if not np.all(np.isfinite(x)):
         raise ValueError(f"{what} must be finite")
     return np.ascontiguousarray(np.broadcast_to(x, (n, nq)))
@@ -121,23 +146,26 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     if n_steps < 1 or record_every < 1:
         raise ValueError("n_steps and record_every must be >= 1")
     n_steps = -(-int(n_steps) // record_every) * record_every   # whole frames
-    E, nq, m = controller.n_episodes, figure.nq, figure.model
+    E, nq, nv, m = controller.n_episodes, figure.nq, figure.nv, figure.model
+    is3d = isinstance(m, Model3D)
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
-    qd0 = _batch_state(qd0, E, nq, np.zeros(nq), "qd0")
+    qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1
     nc, na, ns = len(m.cp_link), len(m.act_dof), len(m.sense_lo)
-    out = dict(q=np.zeros((E, F, nq)), qd=np.zeros((E, F, nq)), com=np.zeros((E, F, 4)),
+    out = dict(q=np.zeros((E, F, nq)), qd=np.zeros((E, F, nv)), com=np.zeros((E, F, 6 if is3d else 4)),
                contact_force=np.zeros((E, F, nc)), pole_hit=np.zeros((E, F)),
                impact=np.zeros((E, F)), energy=np.zeros((E, F)), targets=np.zeros((E, F, na)),
                senses=np.zeros((E, F if record_senses else 1, ns)))
     status = np.zeros((E, 2), dtype=np.int64)
     cstate = np.zeros((E, max(1, controller.cstate_size)))
-    kernel = kernel_for(controller.module)
+    kernel = kernel_for(controller.module, 3 if is3d else 2)
+    # a 3-D kernel gets the goal as (x, y, z); the planar scene's goal is (x, z), y = 0
+    extra = (np.array([scene.goal[0], 0.0, scene.goal[1]]),) if is3d else ()
     old_threads = numba.get_num_threads()
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
-        kernel.rollout_batch(m, scene, float(dt), n_steps, int(record_every), ACTUATION[actuation],
+        kernel.rollout_batch(m, scene, *extra, float(dt), n_steps, int(record_every), ACTUATION[actuation],
                              float(default_tau), DIVERGE_LIMIT, q0, qd0,
                              np.ascontiguousarray(controller.ci, dtype=np.int64),
                              np.ascontiguousarray(controller.cf, dtype=np.float64), cstate,
