@@ -88,7 +88,7 @@ class BSRFamily(Family):
         self.limits = task.fig.actuator_limits()
         if not np.all(np.isfinite(self.limits)):
             raise ValueError(f"BSR needs finite joint limits on every actuator of {task.figure}")
-        self.bsr_dt = float(bsr_dt)
+        self.bsr_dt = min(float(bsr_dt), task.seconds / 8)   # short episodes keep a τ range
 
     def encode(self, genomes):
         return bsr_genome.encode_batch(list(genomes), self.sense_indices, self.task.fig.n_act)
