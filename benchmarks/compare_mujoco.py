@@ -1,10 +1,22 @@
-"""gpmotion's planar kernel against MuJoCo's C rollout on the same workload.
+"""gpmotion's planar kernel against MuJoCo on the same lamp, two workloads.
 
-    python benchmarks/compare_mujoco.py [--quick] [--episodes N] [--seconds S]
+    python benchmarks/compare_mujoco.py [--quick] [--json] [--episodes N] [--seconds S]
 
-Prints one JSON object: steps/s of both engines (one thread and all threads),
-the ratio ours / MuJoCo, and a correctness cross-check (a passive double
-pendulum, no contact, from the same initial state in both engines).
+1. **Sine targets** (``sine``): our kernel vs MuJoCo's C ``rollout`` with the
+   controls precomputed — pure simulator throughput; bar: ours ≥ 3× on one
+   thread.
+2. **GP controllers** (``gp``): the lamp driven by three random ~35-node GP
+   trees (:func:`gpmotion.bench.bench_gp_trees`, the ``gpmotion bench
+   --controller gp`` trees), contacts active, ``lamp_hop`` episodes (3 s).
+   Ours evaluates the trees in-kernel; MuJoCo runs the loop users write
+   today: every step, Python reads the senses from ``MjData``, calls the three
+   ``deap.gp.compile``d trees, writes ``data.ctrl`` and calls
+   ``mujoco.mj_step`` (:func:`mujoco_gp_loop`).  Bar: ours ≥ 10× that loop on
+   one thread; goal ≥ 25×.
+3. A correctness cross-check: a passive double pendulum, no contact, from the
+   same initial state in both engines.
+
+Prints a summary, or one JSON object with every number (``--json``).
 
 The MuJoCo model is generated from the compiled gpmotion ``Model`` arrays
 (:func:`mjcf_from_figure`), so masses, centres of mass, rotational inertias,
@@ -32,11 +44,38 @@ link offsets and joint axes are the same numbers the kernel uses:
 
 Controls change every step: the sine targets our kernel computes in-loop
 are precomputed as MuJoCo's ``control`` array [episodes, steps, n_act].
+
+The MuJoCo + ``gp.compile`` loop builds the same 19-entry sense vector as our
+kernel (``gpmotion.sim.senses``) from ``MjData``:
+
+* exact: ``px, pz`` (root slide qpos − the lamp_hop goal), ``vx, vz, pitch,
+  pitch_rate`` (root qpos/qvel: the slides are world-aligned, the hinge sits
+  at the base origin, so these equal our base senses), ``t`` (``data.time``),
+  ``angle_*`` / ``rate_*`` (hinge qpos/qvel);
+* approximated: ``com_z`` and ``com_vz`` are ``subtree_com[0]`` and
+  ``subtree_linvel[0]`` (after an explicit ``mj_subtreeVel``), which
+  ``mj_step`` left at the state *before* its integration — one step (1 ms)
+  stale; ``force_<contact>`` is the normal force (``mj_contactForce``) of
+  the contact at that point's sphere from MuJoCo's soft-constraint solve of
+  the previous step, not our penalty spring's force at the current state.
+  Trajectories therefore differ between the engines (they would anyway:
+  different contact models); the work per step does not.
+
+The trees are compiled with a *plain* DEAP primitive set holding the same
+primitive functions as gpmotion's registry (protected division, guarded
+sin/cos) — what a DEAP user writes.  gpmotion's own set wraps every
+primitive in the interpreter's clamp, one more Python call per node; that
+variant is timed too (``mujoco_gp_compile_clamped_steps_per_s``), and it is
+what checks that the trees compute in Python what they compute in-kernel
+(``trees_agree_max_abs_diff``, on senses recorded by our rollout).  A
+non-finite tree output (possible without the clamp) sets the joint's neutral
+angle, as our kernel does.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -44,7 +83,7 @@ import time
 import numpy as np
 
 import gpmotion
-from gpmotion.bench import sine_workload
+from gpmotion.bench import bench_gp_trees, sine_workload
 from gpmotion.controllers import schedule
 from gpmotion.model import REVOLUTE, SLIDE_X, SLIDE_Z
 
@@ -96,7 +135,8 @@ def mjcf_from_figure(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator="E
                        f'mass="{_f(m.mass[i])}" diaginertia="{_f(I, I, I)}"/>')
         for k in range(len(m.cp_link)):
             if m.cp_link[k] == i:
-                out.append(f'{pad}  <geom type="sphere" size="{contact_radius}" '
+                out.append(f'{pad}  <geom name="cp_{fig.contact_names[k]}" type="sphere" '
+                           f'size="{contact_radius}" '
                            f'pos="{_f(m.cp_pos[k, 0], 0.0, m.cp_pos[k, 1])}" contype="1" '
                            f'conaffinity="0" condim="3" friction="{_f(scene.mu)} 0.005 0.0001"/>')
         for c in children[i]:
@@ -218,6 +258,134 @@ def compare_lamp(episodes, seconds, repeats, threads, seed=0):
     }
 
 
+# ------------------------------------------------------------------ GP controllers
+
+def plain_pset(info):
+    """A DEAP primitive set as a user writes it: the registry's functions, unwrapped."""
+    from deap import gp
+    pset = gp.PrimitiveSet("USER", len(info.terminal_names))
+    for prim in info.primitives:
+        pset.addPrimitive(prim.func, prim.arity, name=prim.name)
+    pset.renameArguments(**{f"ARG{i}": n for i, n in enumerate(info.terminal_names)})
+    return pset
+
+
+def mujoco_gp_loop(mj, model, fig, goal, funcs, n_steps, q0, qd0, *, unpack=True):
+    """The Python loop users write today: senses → compiled trees → ``data.ctrl`` → ``mj_step``.
+
+    ``funcs`` are compiled trees, one per actuator; each is called with the 19
+    senses as positional arguments (``deap.gp.compile``'s lambda) when
+    ``unpack``, else with the sense list (``compile_reference``).  Returns
+    the final ``MjData`` and the number of steps with some contact.
+    """
+    data = mj.MjData(model)
+    mj.mj_resetData(model, data)
+    data.qpos[:] = q0
+    data.qvel[:] = qd0
+    mj.mj_forward(model, data)
+    nc = len(fig.contact_names)
+    geom_cp = {model.geom(f"cp_{c}").id: k for k, c in enumerate(fig.contact_names)}
+    na = fig.n_act
+    neutral = [float(x) for x in fig.model.neutral]
+    gx, gz = float(goal[0]), float(goal[1])
+    f6 = np.zeros(6)
+    ctrl = data.ctrl
+    subtree_com, subtree_linvel = data.subtree_com, data.subtree_linvel
+    isfinite, contact_force, subtree_vel, step = (math.isfinite, mj.mj_contactForce,
+                                                  mj.mj_subtreeVel, mj.mj_step)
+    touching = 0
+    for _ in range(n_steps):
+        qp = data.qpos.tolist()
+        qv = data.qvel.tolist()
+        force = [0.0] * nc
+        ncon = data.ncon
+        if ncon:
+            touching += 1
+            con = data.contact
+            for i, (g1, g2) in enumerate(con.geom.tolist()):
+                k = geom_cp.get(g2, geom_cp.get(g1))
+                if k is not None:
+                    contact_force(model, data, i, f6)
+                    force[k] += f6[0]
+        subtree_vel(model, data)
+        senses = [qp[0] - gx, qp[1] - gz, qv[0], qv[1], qp[2], qv[2],
+                  float(subtree_com[0, 2]), float(subtree_linvel[0, 2]), data.time,
+                  *qp[3:3 + na], *qv[3:3 + na], *force]
+        for a in range(na):
+            u = funcs[a](*senses) if unpack else funcs[a](senses)
+            ctrl[a] = u if isfinite(u) else neutral[a]
+        step(model, data)
+    return data, touching
+
+
+def compare_lamp_gp(episodes, repeats, threads, py_episodes, seed=0, seconds=None):
+    """Ours (GP trees in-kernel) vs MuJoCo + ``gp.compile`` in a Python loop."""
+    import mujoco as mj
+    from deap import gp
+
+    from gpmotion.gp.bytecode import tokens_to_tree
+    from gpmotion.gp.pset import compile_reference
+
+    task, fam, tokens = bench_gp_trees(seed)
+    fig, scene = task.fig, task.scene()
+    dt = task.dt
+    n_steps = int(round((seconds or task.seconds) / dt))
+    q0, qd0 = task.initial_state()
+    # --- ours: the trees in the kernel
+    batch = fam.encode([tokens] * episodes)
+    run = lambda th: gpmotion.rollout(fig, scene, batch, n_steps=n_steps, q0=q0, qd0=qd0, dt=dt,
+                                      threads=th)
+    tr = run(1)
+    ours1 = _best(lambda: run(1), repeats)
+    oursn = _best(lambda: run(threads), repeats)
+    # --- the trees compute the same in Python: senses recorded in-kernel → compile_reference
+    trees = [tokens_to_tree(t, fam.info) for t in tokens]
+    ref = [compile_reference(t, fam.info) for t in trees]
+    rec = gpmotion.rollout(fig, scene, fam.encode([tokens]), n_steps=min(n_steps, 1000), q0=q0,
+                           qd0=qd0, dt=dt, record_every=1, record_senses=True, threads=1)
+    agree = max(abs(ref[a](s) - rec.targets[0, f, a]) for f, s in enumerate(rec.senses[0])
+                for a in range(fig.n_act))
+    # --- MuJoCo + deap.gp.compile, one thread (a Python loop)
+    model = mj.MjModel.from_xml_string(mjcf_from_figure(fig, scene, dt=dt))
+    user = plain_pset(fam.info)
+    funcs = [gp.compile(t, user) for t in trees]
+    loop = lambda fs, unpack=True: [mujoco_gp_loop(mj, model, fig, scene.goal, fs, n_steps, q0, qd0,
+                                                   unpack=unpack) for _ in range(py_episodes)]
+    loop(funcs)                                    # warm (first-call costs)
+    outs = []
+    mj_gp = _best(lambda: outs.append(loop(funcs)), repeats)
+    mj_gp_clamped = _best(lambda: loop(ref, unpack=False), 1)
+    data, touching = outs[-1][0]
+    ours_step_s = ours1 / (episodes * n_steps)
+    mj_step_s = mj_gp / (py_episodes * n_steps)
+    ratio = mj_step_s / ours_step_s
+    air = tr.contact_force.sum(axis=-1) == 0
+    return {
+        "workload": {"figure": "lamp", "task": task.name, "steps_per_episode": n_steps, "dt": dt,
+                     "trees": tokens, "tree_nodes": [len(t) for t in tokens], "tree_seed": seed,
+                     "ours_episodes": episodes, "mujoco_episodes": py_episodes,
+                     "controls": "3 random GP trees (lamp_hop pset), evaluated every step"},
+        "ours_gp_steps_per_s": 1.0 / ours_step_s,
+        "ours_gp_steps_per_s_all_threads": episodes * n_steps / oursn,
+        "mujoco_gp_compile_steps_per_s": 1.0 / mj_step_s,
+        "mujoco_gp_compile_clamped_steps_per_s": py_episodes * n_steps / mj_gp_clamped,
+        "ratio_one_thread": ratio,
+        "bar_one_thread": 10.0,
+        "goal_one_thread": 25.0,
+        "meets_bar": bool(ratio >= 10.0),
+        "meets_goal": bool(ratio >= 25.0),
+        "threads": threads,
+        "trees_agree_max_abs_diff": float(agree),
+        "ours_diverged": int(tr.diverged.sum()),
+        "ours_contact_frames": float((~air).mean()),
+        "ours_airborne_frames": float(air.mean()),
+        "ours_final_x": float(tr.q[0, -1, 0]),
+        "mujoco_contact_steps": touching / n_steps,
+        "mujoco_final_x": float(data.qpos[0]),
+        "mujoco_finite": bool(np.all(np.isfinite(data.qpos))),
+    }
+
+
 DOUBLE_PENDULUM = {
     "name": "double_pendulum",
     "root": {"type": "fixed", "body": "mount", "position": [0, 2.0]},
@@ -258,11 +426,53 @@ def pendulum_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
     return out
 
 
+def format_summary(r: dict) -> str:
+    lines = []
+    if "ours_steps_per_s" in r:
+        w = r["workload"]
+        lines += [f"sine targets — lamp, {w['episodes']} episodes × {w['steps_per_episode']} steps "
+                  f"(MuJoCo: C rollout, controls precomputed)",
+                  f"  ours    {r['ours_steps_per_s'] / 1e6:8.3f} M steps/s one thread, "
+                  f"{r['ours_steps_per_s_all_threads'] / 1e6:.3f} M on {r['threads']}",
+                  f"  MuJoCo  {r['mujoco_steps_per_s'] / 1e6:8.3f} M steps/s one thread, "
+                  f"{r['mujoco_steps_per_s_all_threads'] / 1e6:.3f} M on {r['threads']}",
+                  f"  ratio   {r['ratio_one_thread']:8.2f}× one thread (bar {r['bar_one_thread']:g}×: "
+                  f"{'met' if r['meets_bar'] else 'NOT met'}), {r['ratio_all_threads']:.2f}× all threads"]
+    if "gp" in r:
+        g, w = r["gp"], r["gp"]["workload"]
+        lines += [f"GP trees ({'/'.join(map(str, w['tree_nodes']))} nodes) — lamp, "
+                  f"{w['steps_per_episode']} steps per episode, contacts on",
+                  f"  ours, trees in-kernel          {g['ours_gp_steps_per_s'] / 1e6:8.3f} M steps/s "
+                  f"one thread ({g['ours_gp_steps_per_s_all_threads'] / 1e6:.3f} M on {g['threads']})",
+                  f"  MuJoCo + DEAP gp.compile loop  {g['mujoco_gp_compile_steps_per_s'] / 1e3:8.1f} k steps/s "
+                  f"one thread (clamped pset: {g['mujoco_gp_compile_clamped_steps_per_s'] / 1e3:.1f} k)",
+                  f"  ratio  {g['ratio_one_thread']:.1f}× (bar {g['bar_one_thread']:g}×: "
+                  f"{'met' if g['meets_bar'] else 'NOT met'}; goal {g['goal_one_thread']:g}×: "
+                  f"{'met' if g['meets_goal'] else 'not met'})",
+                  f"  trees agree in-kernel vs Python: max |Δ| {g['trees_agree_max_abs_diff']:.2g}; "
+                  f"contact: ours {100 * g['ours_contact_frames']:.0f}% of frames, MuJoCo "
+                  f"{100 * g['mujoco_contact_steps']:.0f}% of steps"]
+    if "pendulum_crosscheck" in r:
+        c = r["pendulum_crosscheck"]
+        lines.append(f"pendulum cross-check: max |Δθ| vs MuJoCo Euler {c['max_angle_diff_Euler']:.2g} rad, "
+                     f"RK4 {c['max_angle_diff_RK4']:.2g} (ours dt vs dt/2: {c['ours_dt_vs_dt_half']:.2g})")
+    v = r["versions"]
+    lines.append(f"mujoco {v['mujoco']}, numba {v['numba']}, numpy {v['numpy']}, {v['cpu_count']} cpus")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true")
-    p.add_argument("--episodes", type=int, default=None)
-    p.add_argument("--seconds", type=float, default=None)
+    p.add_argument("--json", action="store_true", help="print one JSON object with every number")
+    p.add_argument("--only", choices=["sine", "gp"], help="run one workload (default: both)")
+    p.add_argument("--episodes", type=int, default=None, help="episodes per batch (ours)")
+    p.add_argument("--seconds", type=float, default=None,
+                   help="simulated seconds per episode, sine workload (GP: lamp_hop's 3 s)")
+    p.add_argument("--gp-seconds", type=float, default=None,
+                   help="simulated seconds per episode, GP workload (default: lamp_hop's)")
+    p.add_argument("--mujoco-episodes", type=int, default=None,
+                   help="episodes of the MuJoCo + gp.compile Python loop per timing")
     p.add_argument("--repeats", type=int, default=None)
     p.add_argument("--threads", type=int, default=None)
     a = p.parse_args(argv)
@@ -272,11 +482,17 @@ def main(argv=None):
     seconds = a.seconds or (0.5 if a.quick else 2.0)
     repeats = a.repeats or (2 if a.quick else 3)
     threads = a.threads or numba.config.NUMBA_NUM_THREADS
-    result = compare_lamp(episodes, seconds, repeats, threads)
+    py_episodes = a.mujoco_episodes or (1 if a.quick else 3)
+    result = {}
+    if a.only in (None, "sine"):
+        result.update(compare_lamp(episodes, seconds, repeats, threads))
+    if a.only in (None, "gp"):
+        result["gp"] = compare_lamp_gp(episodes, repeats, threads, py_episodes,
+                                       seconds=a.gp_seconds)
     result["pendulum_crosscheck"] = pendulum_crosscheck()
     result["versions"] = {"mujoco": mujoco.__version__, "numba": numba.__version__,
                           "numpy": np.__version__, "cpu_count": os.cpu_count()}
-    print(json.dumps(result, indent=2))
+    print(json.dumps(result, indent=2) if a.json else format_summary(result))
     return 0
 
 

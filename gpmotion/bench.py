@@ -1,10 +1,19 @@
-"""Simulator throughput benchmark: ``gpmotion bench [--figure lamp] [--json] [--quick]``.
+"""Simulator throughput benchmark: ``gpmotion bench [--figure lamp] [--controller sine|gp] [--json] [--quick]``.
 
 The workload is the one a search runs: a batch of controlled episodes of a
-figure on the ground, targets changing every step.  Each episode drives every
-actuated joint with ``offset + amplitude·sin(ω t + φ)`` (the ``schedule.sines``
-controller) with its own random frequencies, so the figure moves, lands and
-hops: the contact code is exercised, not skipped.
+figure on the ground, targets changing every step, so the figure moves,
+lands and hops: the contact code is exercised, not skipped.  Two controllers:
+
+* ``--controller sine`` (default): each episode drives every actuated joint
+  with ``offset + amplitude·sin(ω t + φ)`` (the ``schedule.sines``
+  controller) with its own random frequencies;
+* ``--controller gp`` (lamp only): the lamp driven *in-kernel* by three
+  random GP trees (:func:`bench_gp_trees`: ramped half-and-half trees over
+  the ``lamp_hop`` primitive set, fixed seed, rejection-sampled to 30–40
+  nodes each), from ``lamp_hop``'s scene and initial state, episodes of
+  ``lamp_hop``'s length (3 s) unless ``--seconds`` says otherwise.  Every
+  episode runs the same three trees; ``benchmarks/compare_mujoco.py`` runs
+  the same trees in a MuJoCo + ``deap.gp.compile`` Python loop.
 
 Reported (one JSON object with ``--json``):
 
@@ -20,6 +29,8 @@ Reported (one JSON object with ``--json``):
   ``gp_steps_per_s`` the simulated steps per second that implies;
 * ``contact_frames`` / ``airborne_frames`` — fractions of recorded frames with
   some / no ground contact, proof that the workload touches the ground;
+* ``controller`` (``sine`` or ``gp``) and ``tree_nodes`` (node count of
+  each GP tree; ``null`` for sine);
 * versions, cpu count, figure, episodes, steps.
 
 Timings are wall clock on a shared machine: compare ratios within one run.
@@ -65,6 +76,50 @@ def sine_workload(fig, episodes: int, seed: int = 0):
     return offset, amplitude, omega, phase
 
 
+CONTROLLERS = ("sine", "gp")
+GP_TREE_SEED = 0
+GP_TREE_NODES = (30, 40)          # inclusive node-count window of each benchmark tree
+GP_TREE_DEPTH = (2, 6)            # ramped half-and-half depth range
+
+
+def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] = GP_TREE_NODES,
+                   depth: tuple[int, int] = GP_TREE_DEPTH, max_tries: int = 100_000):
+    """The benchmark's GP controller: ``(task, family, trees)`` for ``lamp_hop``.
+
+    ``trees`` is one token list per actuated joint (three for the lamp), each a
+    ramped half-and-half tree of the ``lamp_hop`` primitive set whose node
+    count lies in ``nodes`` (rejection sampling).  Deterministic for a seed;
+    Python's global ``random`` state (DEAP's generator) is restored after.
+    """
+    import random
+
+    from deap import gp
+
+    from .families import make_family
+    from .gp.bytecode import tree_to_tokens
+    from .task import get_task
+
+    task = get_task("lamp_hop")
+    fam = make_family("gp", task)
+    lo, hi = nodes
+    saved = random.getstate()
+    try:
+        random.seed(seed)
+        trees = []
+        for _ in range(max_tries):
+            t = gp.PrimitiveTree(gp.genHalfAndHalf(fam.pset, depth[0], depth[1]))
+            if lo <= len(t) <= hi:
+                trees.append(tree_to_tokens(t))
+                if len(trees) == len(fam.actuators):
+                    break
+        else:
+            raise RuntimeError(f"no {len(fam.actuators)} trees of {lo}..{hi} nodes "
+                               f"in {max_tries} draws")
+    finally:
+        random.setstate(saved)
+    return task, fam, trees
+
+
 def _best_time(fn, repeats: int) -> float:
     best = np.inf
     for _ in range(max(1, repeats)):
@@ -102,9 +157,11 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dic
 
     task = get_task("lamp_hop")
     fam = make_family("gp", task)
+    saved = random.getstate()
     random.seed(seed)
     genomes = [[gp.PrimitiveTree(gp.genHalfAndHalf(fam.pset, 2, 6)) for _ in fam.actuators]
                for _ in range(population)]
+    random.setstate(saved)
     ev = InProcessEvaluator(task, fam, threads=threads)
     ev.evaluate(genomes[:2])                      # compile / load the interpreter and kernel
     t = _best_time(lambda: ev.evaluate(genomes), repeats)
@@ -114,7 +171,8 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dic
 
 def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int | None = None,
               threads: int | None = None, *, quick: bool = False, repeats: int | None = None,
-              gp: bool = True, warm_start: bool = True, seed: int = 0) -> dict:
+              gp: bool = True, warm_start: bool = True, seed: int = 0,
+              controller: str = "sine") -> dict:
     """Measure simulator throughput; returns a JSON-able dict (see the module doc)."""
     import numba
 
@@ -122,20 +180,39 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
     from gpmotion.controllers import schedule
 
     cfg = dict(QUICK if quick else FULL)
+    seconds_arg = seconds
     seconds = float(seconds if seconds is not None else cfg["seconds"])
     episodes = int(episodes if episodes is not None else cfg["episodes"])
     repeats = int(repeats if repeats is not None else cfg["repeats"])
     max_threads = numba.config.NUMBA_NUM_THREADS
     threads = int(min(threads or max_threads, max_threads))
 
+    if controller not in CONTROLLERS:
+        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
     fig = gpmotion.load_figure(figure)
-    scene = gpmotion.make_scene()
-    ctrl = schedule.sines(*sine_workload(fig, episodes, seed))
-    dt = 1e-3
+    tree_nodes = None
+    q0 = qd0 = None
+    if controller == "gp":
+        if fig.name != "lamp":
+            raise ValueError(f"--controller gp runs the lamp_hop trees: needs figure lamp, "
+                             f"got {fig.name!r}")
+        task, fam, trees = bench_gp_trees(seed)
+        tree_nodes = [len(t) for t in trees]
+        scene = task.scene()
+        q0, qd0 = task.initial_state()
+        ctrl = fam.encode([trees] * episodes)
+        dt = task.dt
+        if seconds_arg is None:
+            seconds = task.seconds                 # episodes of lamp_hop length
+    else:
+        scene = gpmotion.make_scene()
+        ctrl = schedule.sines(*sine_workload(fig, episodes, seed))
+        dt = 1e-3
     n_steps = int(round(seconds / dt))
 
     def run(th):
-        return gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, dt=dt, threads=th)
+        return gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, q0=q0, qd0=qd0, dt=dt,
+                                threads=th)
 
     t0 = time.perf_counter()
     tr = run(1)                                    # compiles, or loads the cache
@@ -146,6 +223,8 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
     touching = tr.contact_force.sum(axis=-1) > 0
     result = {
         "figure": fig.name,
+        "controller": controller,
+        "tree_nodes": tree_nodes,
         "episodes": episodes,
         "steps": steps,
         "steps_per_episode": steps // episodes,
@@ -174,8 +253,13 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
 
 
 def format_report(r: dict) -> str:
+    if r.get("controller") == "gp":
+        what = (f"{len(r['tree_nodes'])} random GP trees in-kernel "
+                f"({'/'.join(map(str, r['tree_nodes']))} nodes)")
+    else:
+        what = "sine targets every step"
     lines = [f"gpmotion bench — figure {r['figure']}, {r['episodes']} episodes × "
-             f"{r['steps_per_episode']} steps (dt {r['dt'] * 1e3:g} ms), sine targets every step",
+             f"{r['steps_per_episode']} steps (dt {r['dt'] * 1e3:g} ms), {what}",
              f"  one thread        {r['steps_per_s'] / 1e6:8.3f} M steps/s",
              f"  {r['threads']} threads{' ' * (9 - len(str(r['threads'])))}"
              f"{r['steps_per_s_all_threads'] / 1e6:8.3f} M steps/s",
@@ -195,6 +279,9 @@ def format_report(r: dict) -> str:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gpmotion bench", description="simulator throughput benchmark")
     p.add_argument("--figure", default="lamp", help="figure name (default: lamp)")
+    p.add_argument("--controller", choices=CONTROLLERS, default="sine",
+                   help="what drives the joints: per-episode sines (default) or three random "
+                        "~35-node GP trees in-kernel (lamp only; lamp_hop episodes)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="CI-sized run (seconds, not minutes)")
     p.add_argument("--seconds", type=float, default=None, help="simulated seconds per episode")
@@ -217,8 +304,13 @@ def main(argv=None) -> int:
         if v is not None and not (np.isfinite(v) and v > 0):
             print(f"gpmotion bench: --{name} must be > 0, got {v}", file=sys.stderr)
             return 2
+    if args.controller == "gp" and args.figure != "lamp":
+        print(f"gpmotion bench: --controller gp runs the lamp_hop trees; it needs --figure lamp, "
+              f"got {args.figure!r}", file=sys.stderr)
+        return 2
     r = run_bench(args.figure, args.seconds, args.episodes, args.threads, quick=args.quick,
-                  gp=not args.no_gp, warm_start=not args.no_warm_start)
+                  gp=not args.no_gp, warm_start=not args.no_warm_start,
+                  controller=args.controller)
     print(json.dumps(r, indent=2) if args.json else format_report(r))
     return 0
 

@@ -47,7 +47,7 @@ def _add_run_args(p):
     p.add_argument("--rules", type=int, help="BSR rules per controller")
     p.add_argument("--t-per", type=float, help="time-based BSR period (s; default: episode length)")
     p.add_argument("--actuation", choices=["pd", "kinematic"], help="default: the family's own")
-    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+    p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
                    help="task parameter; VALUE may be a comma list to run a series")
     p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
     p.add_argument("--force", action="store_true", help="move an existing run directory aside")
@@ -77,6 +77,7 @@ def parser() -> argparse.ArgumentParser:
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--out", help="also write filmstrip.png and motion.gif here")
+    p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
@@ -228,21 +229,33 @@ def cmd_replay(args):
     from .run import render_trajectory
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
-    print(f"{task.name} ({family.name}, {actuation}): cost {costs[0]:.4f}  "
-          f"{'SOLVED' if ok[0] else 'not solved'}  [{task.success_threshold}]")
-    print(f"  {'term':<10} {'value':>10} {'weight':>8} {'phase':>6} {'contribution':>13}")
-    for r in task.breakdown(measures, 0, 1.0):
-        print(f"  {r['term']:<10} {r['value']:>10.4f} {r['weight']:>8.3f} {r['phase']:>6.2f} "
-              f"{r['contribution']:>13.4f}{'  (main)' if r['main'] else ''}")
-    for fact in task.describe(traj, measures):
-        print(f"  {fact}")
-    if traj.diverged[0]:
-        print("  the simulation diverged")
+    if args.json:
+        import json
+        print(json.dumps({"task": task.name, "family": family.name, "actuation": actuation,
+                          "cost": float(costs[0]), "success": bool(ok[0]),
+                          "diverged": bool(traj.diverged[0]),
+                          "terms": task.breakdown(measures, 0, 1.0),
+                          "facts": task.describe(traj, measures)}))
+    else:
+        _print_replay(task, family, actuation, traj, costs, measures, ok)
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name)
         print(f"  wrote {out / 'filmstrip.png'} and {out / 'motion.gif'}")
+
+
+def _print_replay(task, family, actuation, traj, costs, measures, ok):
+    print(f"{task.name} ({family.name}, {actuation}): cost {costs[0]:.4f}  "
+          f"{'SOLVED' if ok[0] else 'not solved'}  [{task.success_threshold}]")
+    print(f"  {'term':<16} {'value':>10} {'weight':>8} {'phase':>6} {'contribution':>13}")
+    for r in task.breakdown(measures, 0, 1.0):
+        print(f"  {r['term']:<16} {r['value']:>10.4f} {r['weight']:>8.3f} {r['phase']:>6.2f} "
+              f"{r['contribution']:>13.4f}{'  (main)' if r['main'] else ''}")
+    for fact in task.describe(traj, measures):
+        print(f"  {fact}")
+    if traj.diverged[0]:
+        print("  the simulation diverged")
 
 
 def cmd_render(args):

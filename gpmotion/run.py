@@ -71,11 +71,13 @@ def _evaluator(cfg, task, family, actuation):
 
 
 class Progress:
-    """One line per generation on stderr: best, median, success, speed, ETA."""
+    """Per-generation progress on stderr: one rewritten line on a terminal,
+    plain lines otherwise (logs, CI)."""
 
     def __init__(self, total: int, quiet: bool = False):
         self.total, self.quiet, self.t0 = total, quiet, time.perf_counter()
         self.evals = 0
+        self.tty = sys.stderr.isatty()
 
     def update(self, gen: int, ev: Evaluation, best: float):
         self.evals += len(ev.costs)
@@ -84,14 +86,20 @@ class Progress:
         el = time.perf_counter() - self.t0
         rate = self.evals / el if el > 0 else 0.0
         eta = el / max(gen, 1) * (self.total - gen)
-        print(f"gen {gen:>4}/{self.total}  best {best:.4f}  median {np.median(ev.costs):.4f}  "
-              f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
-              f"{rate:,.0f} evals/s  eta {eta:,.0f}s", file=sys.stderr, flush=True)
+        line = (f"gen {gen:>4}/{self.total}  best {best:.4f}  median {np.median(ev.costs):.4f}  "
+                f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
+                f"{rate:,.0f} evals/s  eta {eta:,.0f}s")
+        if self.tty:
+            end = "\n" if gen >= self.total else ""
+            print("\r" + line + "\033[K", end=end, file=sys.stderr, flush=True)
+        else:
+            print(line, file=sys.stderr, flush=True)
 
 
 def _log_row(search, ev: Evaluation, evals_total: int, elapsed: float) -> dict:
     row = search.row(ev)
     return {"generation": row.pop("generation"), "evaluations": evals_total, **row,
+            "evals_per_s": round(evals_total / elapsed, 1) if elapsed > 0 else "",
             "elapsed_s": round(elapsed, 3)}
 
 

@@ -54,7 +54,7 @@ class LampHop(Task):
     description = "the lamp hops to a target point on the floor"
     params = {"distance": 0.4, "seconds": 3.0}
     terms = HOP_TERMS
-    success_threshold = "base within 5 cm of the target at the end, not fallen"
+    success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
 
     def validate(self):
         if not 0.05 <= abs(self.p["distance"]) <= 5.0:
@@ -67,7 +67,7 @@ class LampHop(Task):
         return hop_measures(self, traj)
 
     def success(self, traj, m):
-        return (m["distance"] < ARRIVED) & (m["fell"] == 0)
+        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["head_hit"] == 0)
 
     def describe(self, traj, m):
         return [f"hops: {count_hops(traj)}", f"final distance {m['distance'][0] * 100:.1f} cm"]

@@ -22,7 +22,7 @@ class LampLimbo(Task):
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )
-    success_threshold = "base within 5 cm of the target, pole untouched, not fallen"
+    success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
 
     def validate(self):
         if not 0.1 <= self.p["distance"] <= 5.0:
@@ -41,7 +41,7 @@ class LampLimbo(Task):
         return m
 
     def success(self, traj, m):
-        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0)
+        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0) & (m["head_hit"] == 0)
 
     def describe(self, traj, m):
         return [f"hops: {count_hops(traj)}", f"pole {'touched' if m['pole'][0] else 'clear'}",

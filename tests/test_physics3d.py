@@ -80,7 +80,7 @@ def chain3d(n_links=3, initial=(0.3, -0.2, 0.25, 0.1, -0.3, 0.2), axes=None):
 
 def humanoid3d():
     """A ~20-dof free-floating figure with 4 foot contacts (speed and smoke tests)."""
-    g = dict(kp=200.0, kd=5.0, torque_limit=150.0)
+    g = dict(kp=1000.0, kd=10.0, torque_limit=600.0)
     B = [dict(rod3("pelvis", 0.25, 10.0, 0.08, (0, 1, 0)), segment=[[0, -0.12, 0], [0, 0.12, 0]]),
          rod3("torso", 0.45, 25.0, 0.12, (0, 0, 1)), rod3("head", 0.2, 5.0, 0.1, (0, 0, 1))]
     J = [dict(name="waist", parent="pelvis", child="torso", offset=[0, 0, 0.08], type="euler",
@@ -91,7 +91,8 @@ def humanoid3d():
     for side, y in (("l", 0.1), ("r", -0.1)):
         B += [rod3(f"thigh_{side}", 0.42, 7.0, 0.06, (0, 0, -1)),
               rod3(f"shin_{side}", 0.4, 3.5, 0.05, (0, 0, -1)),
-              dict(rod3(f"foot_{side}", 0.2, 1.0, 0.03, (1, 0, 0)), segment=[[-0.05, 0, 0], [0.15, 0, 0]]),
+              dict(rod3(f"foot_{side}", 0.3, 2.0, 0.03, (1, 0, 0)), segment=[[-0.1, 0, 0], [0.2, 0, 0]],
+                   inertia=[0.01, 0.01, 0.01]),
               rod3(f"upper_arm_{side}", 0.3, 2.0, 0.04, (0, 0, -1)),
               rod3(f"fore_arm_{side}", 0.28, 1.5, 0.035, (0, 0, -1))]
         J += [dict(name=f"hip_{side}", parent="pelvis", child=f"thigh_{side}", offset=[0, y, 0],
@@ -105,10 +106,10 @@ def humanoid3d():
                    limits=[-2.5, 2.5], **g),
               dict(name=f"elbow_{side}", parent=f"upper_arm_{side}", child=f"fore_arm_{side}",
                    offset=[0, 0, -0.3], axis=[0, 1, 0], limits=[-2.5, 0.0], **g)]
-        C += [dict(name=f"heel_{side}", body=f"foot_{side}", position=[-0.05, 0, -0.03]),
-              dict(name=f"toe_{side}", body=f"foot_{side}", position=[0.15, 0, -0.03])]
+        C += [dict(name=f"heel_{side}", body=f"foot_{side}", position=[-0.1, 0, -0.03]),
+              dict(name=f"toe_{side}", body=f"foot_{side}", position=[0.2, 0, -0.03])]
     return {"dimensions": 3, "name": "humanoid3d",
-            "root": {"type": "free", "body": "pelvis", "position": [0, 0, 0.88]},
+            "root": {"type": "free", "body": "pelvis", "position": [0, 0, 0.85]},
             "bodies": B, "joints": J, "contacts": C,
             "sites": [dict(name="head_top", body="head", position=[0, 0, 0.2])]}
 
@@ -156,28 +157,24 @@ def test_fixed_root_chain_matches_the_planar_kernel():
     assert np.abs(a.segments()[..., [0, 1]] - b.segments()[..., [0, 2]]).max() < 1e-6
 
 
-def test_free_root_lamp_follows_the_planar_kernel_to_first_order():
-    # a free root integrates body-frame velocities, the planar root x, z, θ:
-    # the two agree to O(dt) (the error halves with the step), not to 1e-6
+def test_free_root_lamp_matches_the_planar_kernel():
+    # the free root steps ω_body and the world velocity of its origin; for a
+    # motion in the x–z plane that is exactly the planar root's x, z, θ update
     spec = load_spec(LAMP)
     f2, f3 = compile_spec(spec), compile_spec(planar_spec_to_3d(spec, root="free"))
     assert (f3.nq, f3.nv) == (10, 9)
     ctrl = schedule.sines(f2.model.neutral, 0.4, [5.0, 7.0, 9.0], 0.0)
-    errs = []
-    for dt in (1e-3, 5e-4):
-        ev = int(round(0.01 / dt))
-        a = gpmotion.rollout(f2, gpmotion.make_scene(), ctrl, n_steps=int(1 / dt), dt=dt, record_every=ev)
-        b = gpmotion.rollout(f3, gpmotion.make_scene(), ctrl, n_steps=int(1 / dt), dt=dt, record_every=ev)
-        base = b.base()
-        R = g3.quat_to_rot(base[..., 3:])
-        err = max(np.abs(a.q[..., 3:] - b.q[..., 7:]).max(), np.abs(a.q[..., 0] - base[..., 0]).max(),
-                  np.abs(a.q[..., 1] - base[..., 2]).max(),
-                  np.abs(np.angle(np.exp(1j * (a.q[..., 2] - planar_pitch(R))))).max())
-        assert np.abs(base[..., 1]).max() < 1e-12       # stays in its plane
-        errs.append(err)
-    print(errs)
-    assert errs[0] < 3e-3
-    assert 0.4 < errs[1] / errs[0] < 0.6
+    a = gpmotion.rollout(f2, gpmotion.make_scene(), ctrl, n_steps=1000)
+    b = gpmotion.rollout(f3, gpmotion.make_scene(), ctrl, n_steps=1000)
+    base = b.base()
+    R = g3.quat_to_rot(base[..., 3:])
+    assert a.contact_force.max() > 1.0 and np.ptp(a.q[..., 2]) > 1.0     # it tumbles on the ground
+    assert np.abs(a.q[..., 3:] - b.q[..., 7:]).max() < 1e-6
+    assert np.abs(a.q[..., 0] - base[..., 0]).max() < 1e-6
+    assert np.abs(a.q[..., 1] - base[..., 2]).max() < 1e-6
+    assert np.abs(np.angle(np.exp(1j * (a.q[..., 2] - planar_pitch(R))))).max() < 1e-6
+    assert np.abs(base[..., 1]).max() < 1e-12                            # stays in its plane
+    assert np.abs(a.qd[..., 3:] - b.qd[..., 6:]).max() < 1e-6
 
 
 # ---------------------------------------------------------------- 2. free bodies
@@ -210,7 +207,7 @@ def test_free_rigid_body_keeps_momentum():
     mom = [ref.momentum(fig.model, q, qd) for q, qd in zip(tr.q[0], tr.qd[0])]
     P = np.array([p for p, _ in mom])
     L = np.array([l_ for _, l_ in mom])
-    assert np.abs(P - P[0]).max() < 2e-3 * np.linalg.norm(P[0])
+    assert np.abs(P - P[0]).max() < 1e-12 * np.linalg.norm(P[0])   # ṗ is stepped in world axes
     assert np.abs(L - L[0]).max() < 2e-3 * np.linalg.norm(L[0])
     assert np.abs(np.linalg.norm(tr.q[0, :, 3:7], axis=-1) - 1).max() < 1e-12
 
@@ -231,7 +228,7 @@ def test_torque_free_top_flips_only_about_the_intermediate_axis(axis, flips):
     # energy of rotation is conserved meanwhile
     I = np.array([1.0, 2.0, 3.0])
     e = 0.5 * (I * tr.qd[0, :, :3] ** 2).sum(-1)
-    assert np.abs(e - e[0]).max() < 0.01 * e[0]
+    assert np.abs(e - e[0]).max() < 0.02 * e[0]       # explicit in the gyroscopic term
 
 
 # ---------------------------------------------------------------- 3. energy
@@ -285,17 +282,32 @@ def test_sliding_box_decelerates_at_mu_g_in_any_direction():
     assert np.abs(world_v[-1]).max() < 1e-3                         # and then it stays put
 
 
+def table3d():
+    """A free box on four PD-held legs splayed in 3-D, a contact at every foot."""
+    g = dict(kp=300.0, kd=3.0, torque_limit=100.0)
+    legs = [(0.25, 0.15), (0.25, -0.15), (-0.25, 0.15), (-0.25, -0.15)]
+    return {"dimensions": 3, "name": "table3d",
+            "root": {"type": "free", "body": "top", "position": [0.0, 0.0, 0.42]},
+            "bodies": [dict(rod3("top", 0.5, 5.0, 0.05), segment=[[-0.25, 0, 0], [0.25, 0, 0]],
+                            com=[0, 0, 0])] +
+                      [rod3(f"leg{k}", 0.4, 0.5, 0.02, direction=(0, 0, -1)) for k in range(4)],
+            "joints": [dict(name=f"hip{k}", parent="top", child=f"leg{k}", offset=[x, y, 0],
+                            type="euler", axes="xy", neutral=[0.2 * np.sign(y), -0.2 * np.sign(x)],
+                            initial=[0.2 * np.sign(y), -0.2 * np.sign(x)], limits=[-1, 1], **g)
+                       for k, (x, y) in enumerate(legs)],
+            "contacts": [dict(name=f"foot{k}", body=f"leg{k}", position=[0, 0, -0.4]) for k in range(4)]}
+
+
 def test_standing_figure_stays_still():
-    fig = gpmotion.load_figure(humanoid3d())
-    q0 = fig.q_default.copy()
-    q0[2] = 0.88 - 0.0003
-    _, tr = rollout(fig, 2.0, gpmotion.make_scene(k_ground=40000.0, c_ground=800.0,
-                                                  k_tangent=40000.0, c_tangent=800.0), q0=q0)
+    fig = gpmotion.load_figure(table3d())
+    _, tr = rollout(fig, 4.0, gpmotion.make_scene())
     assert not tr.diverged[0]
-    assert np.abs(tr.qd[0, -10:]).max() < 0.01
-    assert tr.contact_force[0, -1].sum() == pytest.approx(fig.total_mass * 9.81, rel=0.01)
-    assert tr.segments().shape == (1, tr.q.shape[1], len(fig.body_names), 2, 3)
-    assert tr.site("head_top")[0, -1, 2] > 1.5
+    assert np.abs(tr.qd[0, -30:]).max() < 1e-4                     # no jitter
+    assert tr.contact_force[0, -1].sum() == pytest.approx(fig.total_mass * 9.81, rel=1e-3)
+    assert np.allclose(tr.contact_force[0, -1], fig.total_mass * 9.81 / 4, rtol=0.02)
+    feet = tr.segments()[0, -1, 1:, 1]                               # leg tips
+    assert np.abs(feet[:, 2]).max() < 0.01 and np.abs(tr.q[0, -1, :2]).max() < 1e-3
+    assert tr.segments().shape == (1, tr.q.shape[1], 5, 2, 3)
 
 
 # ---------------------------------------------------------------- 5. servo, pendulum
@@ -515,7 +527,7 @@ def test_senses_are_named_and_normalized():
     _, tr = rollout(fig, 0.2, gpmotion.make_scene(), record_senses=True)
     assert tr.senses.shape[-1] == len(fig.sense_names)
     assert tr.sense("up_z")[0, 0] == pytest.approx(1.0)
-    assert tr.sense("pz")[0, 0] == pytest.approx(0.88)
+    assert tr.sense("pz")[0, 0] == pytest.approx(0.85)
 
 
 @pytest.mark.parametrize("change, message", [

@@ -71,7 +71,8 @@ class GPAdapter:
         h = self.search.history[-1]
         return {"generation": h["generation"], "progress": round(h["progress"], 6),
                 "best_so_far": h["best_so_far"], "gen_min": h["min"], "gen_median": h["median"],
-                "gen_mean": h["mean"], "evaluated": h["evaluated"],
+                "gen_mean": h["mean"], "gen_max": h["max"],
+                "evaluated": h["evaluated"],
                 "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
                 "avg_tree_size": round(h["avg_tree_size"], 2)}
 
@@ -129,7 +130,7 @@ class SerialAdapter:
         return {"generation": self.search.generation, "progress": round(self.progress, 6),
                 "best_so_far": self.best_cost, "gen_min": float(c.min()),
                 "gen_median": float(np.median(c)), "gen_mean": float(c.mean()),
-                "evaluated": len(c), "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
+                "gen_max": float(c.max()), "evaluated": len(c), "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
                 "avg_tree_size": ""}
 
 

@@ -263,6 +263,7 @@ class GPSearch:
         row = {"generation": self.generation, "progress": self.progress,
                "evaluations": self.evaluations, "evaluated": n_evaluated,
                "min": cost, "median": float(np.median(c)), "mean": float(np.mean(c)),
+               "max": float(np.max(c)),
                "best_so_far": self.best_cost, "avg_tree_size": float(np.mean(sizes)),
                "max_tree_depth": max(t.height for ind in self._pop for t in ind)}
         if evaluation is not None:

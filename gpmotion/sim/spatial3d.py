@@ -631,18 +631,34 @@ def mechanical_energy(M, S, R, pos, v):
 
 @njit(**_INLINE)
 def integrate(M, q, qd, qdd, dt, limit):
-    """Semi-implicit Euler; a free root's quaternion follows the body angular
-    velocity exactly over the step (then renormalized) and its position moves
-    with the new velocity in the new orientation.  Returns False when the
-    state is non-finite or absurd."""
+    """Semi-implicit Euler.  A free root: ω_body += dt·ω̇; the quaternion turns
+    by exp(dt·ω_body) (exact for the step, then renormalized); the origin's
+    world velocity ṗ += dt·R(a_lin + ω × v) and p += dt·ṗ; then
+    v_body = R(new)ᵀ ṗ.  Returns False when the state is non-finite or absurd."""
     ok = True
     for i in range(M.parent.shape[0]):
         qa = M.qadr[i]
         da = M.dadr[i]
         if M.jtype[i] == FREE:
-            for k in range(6):
-                qd[da + k] += dt * qdd[da + k]
+            a0, a1, a2, a3 = q[qa + 3], q[qa + 4], q[qa + 5], q[qa + 6]
             w0, w1, w2 = qd[da], qd[da + 1], qd[da + 2]
+            u0, u1, u2 = qd[da + 3], qd[da + 4], qd[da + 5]
+            # the origin's classical acceleration (body coords): a_lin + ω × v;
+            # its world velocity ṗ is stepped in world coordinates, so a body
+            # in free flight keeps its momentum exactly
+            g0 = u0 + dt * (qdd[da + 3] + w1 * u2 - w2 * u1)
+            g1 = u1 + dt * (qdd[da + 4] + w2 * u0 - w0 * u2)
+            g2 = u2 + dt * (qdd[da + 5] + w0 * u1 - w1 * u0)
+            p0 = (1.0 - 2.0 * (a2 * a2 + a3 * a3)) * g0 + 2.0 * (a1 * a2 - a0 * a3) * g1 \
+                + 2.0 * (a1 * a3 + a0 * a2) * g2
+            p1 = 2.0 * (a1 * a2 + a0 * a3) * g0 + (1.0 - 2.0 * (a1 * a1 + a3 * a3)) * g1 \
+                + 2.0 * (a2 * a3 - a0 * a1) * g2
+            p2 = 2.0 * (a1 * a3 - a0 * a2) * g0 + 2.0 * (a2 * a3 + a0 * a1) * g1 \
+                + (1.0 - 2.0 * (a1 * a1 + a2 * a2)) * g2
+            w0 += dt * qdd[da]
+            w1 += dt * qdd[da + 1]
+            w2 += dt * qdd[da + 2]
+            qd[da], qd[da + 1], qd[da + 2] = w0, w1, w2
             wn = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
             h = 0.5 * wn * dt
             if wn > 0.0:
@@ -650,7 +666,6 @@ def integrate(M, q, qd, qdd, dt, limit):
             else:
                 sc = 0.5 * dt
             c0, c1, c2, c3 = np.cos(h), sc * w0, sc * w1, sc * w2
-            a0, a1, a2, a3 = q[qa + 3], q[qa + 4], q[qa + 5], q[qa + 6]
             n0 = a0 * c0 - a1 * c1 - a2 * c2 - a3 * c3
             n1 = a0 * c1 + a1 * c0 + a2 * c3 - a3 * c2
             n2 = a0 * c2 - a1 * c3 + a2 * c0 + a3 * c1
@@ -658,14 +673,16 @@ def integrate(M, q, qd, qdd, dt, limit):
             nn = 1.0 / np.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
             n0, n1, n2, n3 = n0 * nn, n1 * nn, n2 * nn, n3 * nn
             q[qa + 3], q[qa + 4], q[qa + 5], q[qa + 6] = n0, n1, n2, n3
-            u0, u1, u2 = qd[da + 3], qd[da + 4], qd[da + 5]
-            # ṗ = R(new) v_body
-            q[qa] += dt * ((1.0 - 2.0 * (n2 * n2 + n3 * n3)) * u0 + 2.0 * (n1 * n2 - n0 * n3) * u1
-                           + 2.0 * (n1 * n3 + n0 * n2) * u2)
-            q[qa + 1] += dt * (2.0 * (n1 * n2 + n0 * n3) * u0 + (1.0 - 2.0 * (n1 * n1 + n3 * n3)) * u1
-                               + 2.0 * (n2 * n3 - n0 * n1) * u2)
-            q[qa + 2] += dt * (2.0 * (n1 * n3 - n0 * n2) * u0 + 2.0 * (n2 * n3 + n0 * n1) * u1
-                               + (1.0 - 2.0 * (n1 * n1 + n2 * n2)) * u2)
+            q[qa] += dt * p0
+            q[qa + 1] += dt * p1
+            q[qa + 2] += dt * p2
+            # v_body = R(new)ᵀ ṗ
+            qd[da + 3] = (1.0 - 2.0 * (n2 * n2 + n3 * n3)) * p0 + 2.0 * (n1 * n2 + n0 * n3) * p1 \
+                + 2.0 * (n1 * n3 - n0 * n2) * p2
+            qd[da + 4] = 2.0 * (n1 * n2 - n0 * n3) * p0 + (1.0 - 2.0 * (n1 * n1 + n3 * n3)) * p1 \
+                + 2.0 * (n2 * n3 + n0 * n1) * p2
+            qd[da + 5] = 2.0 * (n1 * n3 + n0 * n2) * p0 + 2.0 * (n2 * n3 - n0 * n1) * p1 \
+                + (1.0 - 2.0 * (n1 * n1 + n2 * n2)) * p2
         else:
             qd[da] += dt * qdd[da]
             q[qa] += dt * qd[da]
