@@ -4,7 +4,7 @@ import numpy as np
 
 from gpmotion.bsr import secondary
 from gpmotion.sim import geometry
-from gpmotion.task import Term
+from gpmotion.task import Task, Term
 
 
 def travel_terms(p):
@@ -47,3 +47,22 @@ def gait(traj, m, e=0):
 
 
 TRAVEL_PARAMS = {"w_max_height": 0.0, "w_contact_distance": 0.0, "w_rotations": 0.0}
+
+
+class TravelTask(Task):
+    """Travel right: cost = −(com distance + Σ w·secondary term)."""
+    params = {"seconds": 3.0, "success_distance": 1.0, **TRAVEL_PARAMS}
+    terms = travel_terms(TRAVEL_PARAMS)
+    success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
+
+    def validate(self):
+        self.terms = travel_terms(self.p)      # weights are parameters
+
+    def measure(self, traj):
+        return travel_measures(traj)
+
+    def success(self, traj, m):
+        return m["distance"] >= self.p["success_distance"]
+
+    def describe(self, traj, m):
+        return gait(traj, m)

@@ -19,18 +19,9 @@ GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0
 SERIAL_DEFAULTS = dict(n_working=10, n_generations=4000, reseed_every=200)
 
 
-class GPAdapter:
-    kind = "gp"
-
-    def __init__(self, family, seed: int, **opts):
-        from .gp import GPSearch
-        self.family = family
-        self.search = GPSearch(family, seed=seed, **{**GP_DEFAULTS, **opts})
-        self.last: Evaluation | None = None
-
-    @property
-    def progress(self):
-        return self.search.progress
+class _Adapter:
+    """What both searches share: the run loop's vocabulary over ``self.search``."""
+    kind = ""
 
     @property
     def done(self):
@@ -40,15 +31,33 @@ class GPAdapter:
     def generation(self):
         return self.search.generation
 
+    def ask(self):
+        return self.search.ask()
+
+    def state_dict(self):
+        return self.search.state_dict()
+
+    def load_state_dict(self, d):
+        self.search.load_state_dict(d)
+
+
+class GPAdapter(_Adapter):
+    kind = "gp"
+
+    def __init__(self, family, seed: int, **opts):
+        from .gp import GPSearch
+        self.family = family
+        self.search = GPSearch(family, seed=seed, **{**GP_DEFAULTS, **opts})
+
+    @property
+    def progress(self):
+        return self.search.progress
+
     @property
     def total(self):
         return self.search.generations
 
-    def ask(self):
-        return self.search.ask()
-
     def tell(self, ev: Evaluation):
-        self.last = ev
         self.search.tell(ev.costs, ev)
 
     @property
@@ -59,25 +68,18 @@ class GPAdapter:
     def best_cost(self):
         return float(self.search.best_cost)
 
-    def state_dict(self):
-        return self.search.state_dict()
-
-    def load_state_dict(self, d):
-        self.search.load_state_dict(d)
-
     def row(self, ev: Evaluation) -> dict:
         """log.csv row of the generation just told (whole population, not
         only the genomes evaluated this time: copies reuse their costs)."""
         h = self.search.history[-1]
         return {"generation": h["generation"], "progress": round(h["progress"], 6),
                 "best_so_far": h["best_so_far"], "gen_min": h["min"], "gen_median": h["median"],
-                "gen_mean": h["mean"], "gen_max": h["max"],
-                "evaluated": h["evaluated"],
+                "gen_mean": h["mean"], "gen_max": h["max"], "evaluated": h["evaluated"],
                 "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
                 "avg_tree_size": round(h["avg_tree_size"], 2)}
 
 
-class SerialAdapter:
+class SerialAdapter(_Adapter):
     """Auslander's serial search minimizing task costs; a 'generation' is one
     round of C mutants (C evaluations)."""
     kind = "serial"
@@ -94,19 +96,8 @@ class SerialAdapter:
         return min(1.0, self.search.generation / max(1, self.search.n_generations))
 
     @property
-    def done(self):
-        return self.search.done
-
-    @property
-    def generation(self):
-        return self.search.generation
-
-    @property
     def total(self):
         return self.search.n_generations
-
-    def ask(self):
-        return self.search.ask()
 
     def tell(self, ev: Evaluation):
         self.search.tell(ev.costs, ev.extras)
@@ -119,19 +110,13 @@ class SerialAdapter:
     def best_cost(self):
         return float(self.search.best_score)
 
-    def state_dict(self):
-        return self.search.state_dict()
-
-    def load_state_dict(self, d):
-        self.search.load_state_dict(d)
-
     def row(self, ev: Evaluation) -> dict:
         c = ev.costs
         return {"generation": self.search.generation, "progress": round(self.progress, 6),
                 "best_so_far": self.best_cost, "gen_min": float(c.min()),
                 "gen_median": float(np.median(c)), "gen_mean": float(c.mean()),
-                "gen_max": float(c.max()), "evaluated": len(c), "solved": int(ev.success.sum()), "failed": int(ev.failed.sum()),
-                "avg_tree_size": ""}
+                "gen_max": float(c.max()), "evaluated": len(c), "solved": int(ev.success.sum()),
+                "failed": int(ev.failed.sum()), "avg_tree_size": ""}
 
 
 def make_search(family, seed: int, **opts):
