@@ -1,6 +1,6 @@
 """Simulator throughput (the script behind ``gpmotion bench``).
 
-    python benchmarks/bench_sim.py [--figure lamp] [--json] [--quick]
+    python benchmarks/bench_sim.py [--figure lamp] [--controller sine|gp] [--json] [--quick]
 
 See gpmotion/bench.py for what is measured and how.
 """

@@ -454,7 +454,8 @@ def format_summary(r: dict) -> str:
                   f"{w['steps_per_episode']} steps per episode, contacts on",
                   f"  ours, trees in-kernel          {g['ours_gp_steps_per_s'] / 1e6:8.3f} M steps/s "
                   f"one thread ({g['ours_gp_steps_per_s_all_threads'] / 1e6:.3f} M on {g['threads']})",
-                  f"  MuJoCo + DEAP gp.compile loop  {g['mujoco_gp_compile_steps_per_s'] / 1e3:8.1f} k steps/s "
+                  f"  MuJoCo + DEAP gp.compile loop  "
+                  f"{g['mujoco_gp_compile_steps_per_s'] / 1e3:8.1f} k steps/s "
                   f"one thread (clamped pset: {g['mujoco_gp_compile_clamped_steps_per_s'] / 1e3:.1f} k)",
                   f"  ratio  {g['ratio_one_thread']:.1f}× (bar {g['bar_one_thread']:g}×: "
                   f"{'met' if g['meets_bar'] else 'NOT met'}; goal {g['goal_one_thread']:g}×: "

@@ -1,4 +1,4 @@
-"""Simulator throughput benchmark: ``gpmotion bench [--figure lamp] [--controller sine|gp] [--json] [--quick]``.
+"""Simulator throughput benchmark: ``gpmotion bench [--figure F] [--controller sine|gp] [--json] [--quick]``.
 
 The workload is the one a search runs: a batch of controlled episodes of a
 figure on the ground, targets changing every step, so the figure moves,

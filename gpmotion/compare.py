@@ -13,6 +13,7 @@ import csv
 import io
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -95,7 +96,9 @@ def _bands(runs, budget):
             idx = np.searchsorted(e, grid, side="right") - 1
             ys.append(np.where(idx >= 0, b[np.clip(idx, 0, None)], np.nan))
         y = np.array(ys)
-        series[fam] = (grid, *np.nanpercentile(y, [25, 50, 75], axis=0))
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)   # before a run's first point
+            series[fam] = (grid, *np.nanpercentile(y, [25, 50, 75], axis=0))
     return series
 
 

@@ -53,6 +53,7 @@ class InProcessEvaluator:
         return rollout(self.task.fig, self._scene, batch, n_steps=self.task.n_steps,
                        q0=self._q0, qd0=self._qd0, dt=self.task.dt,
                        record_every=self.task.record_every, actuation=self.actuation,
+                       default_tau=self.family.default_tau,
                        record_senses=record_senses or self.family.needs_senses,
                        threads=self.threads)
 

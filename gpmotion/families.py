@@ -39,14 +39,23 @@ class Family:
     def config(self) -> dict:
         return {"family": self.name, **self.options}
 
+    @property
+    def default_tau(self) -> float:
+        """τ for `kinematic` actuation when the controller does not set one."""
+        return float(self.options.get("tau") or 0.1)
+
 
 class GPFamily(Family):
     """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
     name = "gp"
 
-    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), **options):
+    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1, **options):
+        # tau: the fixed time constant of GP targets under `kinematic` actuation
+        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair)
         super().__init__(task, primitives=list(primitives) if primitives else None,
-                         erc_range=list(erc_range), **options)
+                         erc_range=list(erc_range), tau=float(tau), **options)
+        if not 0.002 <= self.options["tau"] <= 10:
+            raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         self.info = build_pset(task.terminal_names(), primitives,
                                sense_names=task.fig.sense_names, erc_range=tuple(erc_range))
         self.actuators = list(range(task.fig.n_act))

@@ -94,7 +94,7 @@ class Task:
         return make_scene()
 
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.fig.q_default.copy(), np.zeros(self.fig.nq)
+        return self.fig.q_default.copy(), np.zeros(self.fig.nv)
 
     def measure(self, traj) -> dict[str, np.ndarray]:
         """Raw value of every term, each an array over episodes."""

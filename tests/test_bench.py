@@ -21,6 +21,7 @@ def test_quick_bench_reports_positive_numbers(quick):
     assert quick["steps"] == quick["episodes"] * quick["steps_per_episode"]
     assert quick["diverged"] == 0
     assert 0 < quick["contact_frames"] <= 1      # the lamp really touches the ground
+    assert quick["controller"] == "sine" and quick["tree_nodes"] is None
 
 
 def test_report_and_cli(quick, capsys):
@@ -36,3 +37,45 @@ def test_cli_rejects_bad_input(capsys):
     assert bench.main(["--episodes", "0"]) == 2
     err = capsys.readouterr().err
     assert "unknown figure" in err and "--episodes" in err
+
+
+def test_gp_controller_bench(capsys):
+    r = bench.run_bench("lamp", quick=True, episodes=2, seconds=0.2, repeats=1, gp=False,
+                        warm_start=False, controller="gp")
+    assert r["controller"] == "gp" and len(r["tree_nodes"]) == 3
+    assert all(30 <= n <= 40 for n in r["tree_nodes"])
+    assert r["steps_per_s"] > 0 and r["steps_per_s_all_threads"] > 0
+    assert r["steps_per_episode"] == 200 and r["diverged"] == 0
+    assert "GP trees in-kernel" in bench.format_report(r)
+    # the same trees every time (fixed seed), and DEAP's global random state is left alone
+    import random
+    state = random.getstate()
+    task, fam, trees = bench.bench_gp_trees()
+    assert random.getstate() == state
+    assert [len(t) for t in trees] == r["tree_nodes"] and bench.bench_gp_trees()[2] == trees
+    for t in trees:
+        fam.encode([[t] * 3])                                    # valid lamp_hop trees
+    # CLI: lamp_hop-length episodes by default; other figures are refused
+    assert bench.main(["--controller", "gp", "--quick", "--json", "--no-gp", "--no-warm-start",
+                       "--episodes", "2"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["controller"] == "gp" and out["steps_per_episode"] == 3000
+    assert bench.main(["--controller", "gp", "--figure", "starman"]) == 2
+    assert "needs --figure lamp" in capsys.readouterr().err
+
+
+def test_compare_mujoco_gp_smoke():
+    """benchmarks/compare_mujoco.py's GP workload runs (tiny; no timing assertions)."""
+    pytest.importorskip("mujoco")
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare_mujoco.py"
+    spec = importlib.util.spec_from_file_location("compare_mujoco_under_test", path)
+    cm = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(cm)
+    g = cm.compare_lamp_gp(episodes=2, repeats=1, threads=1, py_episodes=1, seconds=0.05)
+    assert g["ours_gp_steps_per_s"] > 0 and g["mujoco_gp_compile_steps_per_s"] > 0
+    assert g["ratio_one_thread"] > 0 and g["workload"]["steps_per_episode"] == 50
+    assert g["trees_agree_max_abs_diff"] < 1e-9        # same trees, same values in both
+    assert g["senses_initial_max_abs_diff"] < 1e-9     # the loop's senses are ours
+    assert g["mujoco_finite"]

@@ -184,12 +184,10 @@ def momentum(M, q, qd):
         if m == 0:
             continue
         c = M.com[i]
-        w = R[i] @ v[i, :3]
         vc = R[i] @ (v[i, 3:] + np.cross(v[i, :3], c))
         x = P[i] + R[i] @ c
         lin += m * vc
         ang += R[i] @ M.icom[i] @ v[i, :3] + m * np.cross(x, vc)
-        del w
     return lin, ang
 
 
