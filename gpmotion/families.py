@@ -58,7 +58,7 @@ class GPFamily(Family):
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         self.info = build_pset(task.terminal_names(), primitives,
                                sense_names=task.fig.sense_names, erc_range=tuple(erc_range))
-        self.actuators = list(range(task.fig.n_act))
+        self.actuators = task.controlled_actuators()
 
     @property
     def pset(self):

@@ -60,6 +60,8 @@ class Task:
     params: ClassVar[dict] = {"seconds": 3.0}
     terms: ClassVar[tuple[Term, ...]] = ()
     terminals: ClassVar[tuple[str, ...] | None] = None   # None: every sense of the figure
+    controlled: ClassVar[tuple[str, ...] | None] = None  # actuators the controller drives
+    #   (None: all); the others hold the figure's neutral pose with their PD servos
     actuation: ClassVar[str] = "pd"
     record_every: ClassVar[int] = 10
     dt: ClassVar[float] = 1e-3
@@ -116,6 +118,16 @@ class Task:
     @property
     def n_steps(self) -> int:
         return int(round(self.seconds / self.dt))
+
+    def controlled_actuators(self) -> list[int]:
+        """Indices (into the figure's actuators) of the joints the controller drives."""
+        names = self.fig.actuator_names
+        if self.controlled is None:
+            return list(range(len(names)))
+        missing = [n for n in self.controlled if n not in names]
+        if missing:
+            raise ValueError(f"task {self.name}: {missing} are not actuated joints of {self.figure}")
+        return [names.index(n) for n in self.controlled]
 
     def terminal_names(self) -> list[str]:
         names = list(self.terminals) if self.terminals is not None else list(self.fig.sense_names)
