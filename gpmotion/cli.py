@@ -84,6 +84,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seconds", type=float, default=2.0)
     p.add_argument("-o", "--output", default="filmstrip.png")
     p.add_argument("--gif", help="also write a GIF")
+    p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
     p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
     p.add_argument("task")
     p.add_argument("--controllers", default="gp,bsr-sense,bsr-time")
@@ -243,6 +244,9 @@ def cmd_replay(args):
         out.mkdir(parents=True, exist_ok=True)
         render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name)
         print(f"  wrote {out / 'filmstrip.png'} and {out / 'motion.gif'}")
+        if family.name == "gp":
+            from .run import plot_gp_trees
+            plot_gp_trees(out / "trees.png", task, family, genome)
 
 
 def _print_replay(task, family, actuation, traj, costs, measures, ok):
@@ -262,6 +266,8 @@ def cmd_render(args):
     from .run import render_trajectory
     if bool(args.source) == bool(args.figure):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
+    if args.figure and args.trees:
+        raise ValueError("--trees needs a GP controller, not --figure")
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
@@ -274,6 +280,12 @@ def cmd_render(args):
         task, family, actuation, genome, rec = load_controller(args.source)
         traj = replay_genome(task, family, actuation, genome)[0]
         title = f"{task.name} ({family.name})"
+        if args.trees:
+            if family.name != "gp":
+                raise ValueError("--trees needs a GP controller")
+            from .run import plot_gp_trees
+            plot_gp_trees(args.trees, task, family, genome)
+            print(f"wrote {args.trees}")
     render_trajectory(traj, args.output, args.gif, title=title)
     print(f"wrote {args.output}" + (f" and {args.gif}" if args.gif else ""))
 

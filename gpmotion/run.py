@@ -224,12 +224,20 @@ def write_artifacts(rd: RunDir, task, family, actuation, genome):
     traj, *_ = replay_genome(task, family, actuation, genome)
     render_trajectory(traj, rd.artifact("filmstrip.png"), rd.artifact("motion.gif"),
                       title=f"{task.name} ({family.name})")
+    if family.name == "gp":
+        plot_gp_trees(rd.artifact("trees.png"), task, family, genome)
     rows = rd.read_log()
     if rows:
         x = [int(r["evaluations"]) for r in rows]
         render.curve(rd.artifact("curve.png"), x, [float(r["best_so_far"]) for r in rows],
                      median=[float(r["gen_median"]) for r in rows], xlabel="evaluations",
                      title=f"{task.name} ({family.name})")
+
+
+def plot_gp_trees(path, task, family, genome):
+    from .treeplot import plot_trees
+    names = [task.fig.actuator_names[i] for i in family.actuators]
+    plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 
 def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0):

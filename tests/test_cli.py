@@ -23,7 +23,7 @@ def test_run_writes_a_complete_run_directory_and_replays(tmp_path, capsys):
     out = tmp_path / "r"
     assert main(["run", "lamp_hop", "--out", str(out), *TINY]) == 0
     for name in ("config.json", "log.csv", "checkpoint.json", "best.json", "curve.png",
-                 "filmstrip.png", "motion.gif"):
+                 "filmstrip.png", "motion.gif", "trees.png"):
         assert (out / name).stat().st_size > 0, name
     best = json.loads((out / "best.json").read_text())
     assert best["format"] == "gpmotion-best" and len(best["genome"]["trees"]) == 3
