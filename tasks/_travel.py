@@ -54,6 +54,7 @@ class TravelTask(Task):
     params = {"seconds": 3.0, "success_distance": 1.0, **TRAVEL_PARAMS}
     terms = travel_terms(TRAVEL_PARAMS)
     success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
+    record_every = 20           # 50 frames/s resolve every gait event these terms use
 
     def validate(self):
         self.terms = travel_terms(self.p)      # weights are parameters

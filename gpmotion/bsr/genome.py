@@ -108,6 +108,16 @@ def _expect_dict(d, fmt, keys):
         raise ValueError(f"genome ({fmt}) is missing field(s): {', '.join(missing)}")
 
 
+def _trusted_copy(genome):
+    """A deep copy without re-validation: the genome was validated when built,
+    and mutation keeps every value in range (the serial search copies one
+    genome per candidate, so validation would cost more than it checks)."""
+    g = object.__new__(type(genome))
+    g.__dict__.update({k: v.copy() if isinstance(v, np.ndarray) else v
+                       for k, v in genome.__dict__.items()})
+    return g
+
+
 @dataclass(eq=False)
 class SenseGenome:
     """Sense-based controller: rule j = (μ[j], λ[j]) → (θ₀[j], τ[j])."""
@@ -150,8 +160,7 @@ class SenseGenome:
         return np.log(self.lam / LAMBDA_MIN).sum(axis=1)
 
     def copy(self) -> "SenseGenome":
-        return SenseGenome(self.mu.copy(), self.lam.copy(), self.theta0.copy(),
-                           self.tau.copy(), self.limits.copy(), self.tau_range.copy())
+        return _trusted_copy(self)
 
     def to_dict(self) -> dict:
         return {"format": SENSE_FORMAT, "mu": self.mu.tolist(),
@@ -197,8 +206,7 @@ class TimeGenome:
         return self.theta0.size + self.tau.size
 
     def copy(self) -> "TimeGenome":
-        return TimeGenome(self.theta0.copy(), self.tau.copy(), self.t_per,
-                          self.limits.copy(), self.tau_range.copy())
+        return _trusted_copy(self)
 
     def to_dict(self) -> dict:
         return {"format": TIME_FORMAT, "theta0": self.theta0.tolist(),

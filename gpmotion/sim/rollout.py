@@ -28,8 +28,20 @@ ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
 _SIM3D_SOURCES = [_HERE / "spatial3d.py", _HERE / "episode3d_template.py", _HERE.parent / "cache.py"]
 
 
+_KERNELS: dict = {}
+
+
 def kernel_for(control_module: str, dimensions: int = 2):
-    """Import (generating if needed) the rollout kernel for a controller module."""
+    """The rollout kernel for a controller module (memoized per file version:
+    hashing the sources on every call costs more than a small rollout)."""
+    st = Path(control_module).stat()
+    memo = (control_module, dimensions, st.st_mtime_ns, st.st_size)
+    if memo not in _KERNELS:
+        _KERNELS[memo] = _kernel_for(control_module, dimensions)
+    return _KERNELS[memo]
+
+
+def _kernel_for(control_module: str, dimensions: int):
     ctrl_src = Path(control_module).read_bytes()
     sources, template, stem = ((_SIM_SOURCES, TEMPLATE, "rollout") if dimensions == 2 else
                                (_SIM3D_SOURCES, TEMPLATE3D, "rollout3d"))
@@ -89,10 +101,17 @@ class Trajectory:
         return isinstance(self.figure.model, Model3D)
 
     def poses(self) -> np.ndarray:
-        """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms."""
-        if self.is3d:
-            return geometry3d.link_poses(self.figure.model, self.q)
-        return geometry.link_poses(self.figure.model, self.q)
+        """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms.
+
+        Computed once per Trajectory (scores ask for it several times); the
+        result is read-only."""
+        cached = self.__dict__.get("_poses")
+        if cached is None or cached[0] is not self.q:
+            geo = geometry3d if self.is3d else geometry
+            poses = geo.link_poses(self.figure.model, self.q)
+            poses.setflags(write=False)
+            cached = self.__dict__["_poses"] = (self.q, poses)
+        return cached[1]
 
     def base(self) -> np.ndarray:
         """Base (root body) pose [E, F, 3] = (pitch, x, z); 3-D: [E, F, 7] (x, y, z, qw, qx, qy, qz)."""
