@@ -98,6 +98,11 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
     p.add_argument("--quiet", action="store_true")
+    p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
+    p.add_argument("source", help="run directory or controller JSON (best.json)")
+    p.add_argument("--bvh", required=True, metavar="OUT.bvh")
+    p.add_argument("--scale", type=float, default=100.0,
+                   help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
     p.add_argument("--plugins", action="append", default=[], metavar="DIR")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
@@ -309,6 +314,20 @@ def cmd_compare(args):
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
 
 
+def cmd_export(args):
+    from .bvh import write_bvh
+    from .records import validate_number
+    from .replay import load_controller, replay_genome
+    validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
+    task, family, actuation, genome, rec = load_controller(args.source)
+    traj = replay_genome(task, family, actuation, genome)[0]
+    n = write_bvh(args.bvh, traj, scale=args.scale)
+    print(f"wrote {args.bvh}: {len(traj.figure.body_names)} joints, {n} frames at "
+          f"{1 / (traj.dt * traj.record_every):g} fps (y-up, units of 1/{args.scale:g} m)")
+    if traj.diverged[0]:
+        print("  the simulation diverged: the frames after it are not written")
+
+
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
@@ -336,7 +355,7 @@ def _report(label, fn, arg):
 
 
 COMMANDS = {"list": cmd_list, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
-            "render": cmd_render, "check": cmd_check, "compare": cmd_compare}
+            "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -241,13 +241,6 @@ def plot_gp_trees(path, task, family, genome):
 
 
 def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0):
-    from . import render
-    seg = traj.segments()[e]
-    radii = traj.figure.model.seg_r
-    sc = traj.scene
-    kw = dict(poles=sc.poles if len(sc.poles) else None,
-              ground_z=sc.ground_z if sc.ground else None, goal=tuple(sc.goal), title=title)
-    if filmstrip:
-        render.filmstrip(filmstrip, seg, radii, traj.times, **kw)
-    if gif:
-        render.animate(gif, seg, radii, traj.times, **kw)
+    """Filmstrip PNG and/or GIF of one episode, planar or 3-D."""
+    from .render3d import render_any
+    render_any(traj, filmstrip, gif, title=title, e=e)

@@ -193,3 +193,13 @@ def test_replay_reproduces_the_logged_cost_exactly(tmp_path, capsys):
     last = dict(zip(header, log[-1].split(",")))
     assert float(last["best_so_far"]) == best["cost"]
     assert {"gen_max", "evals_per_s", "failed"} <= set(header)
+
+
+def test_export_writes_a_bvh_an_independent_parser_reads(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["run", "lamp_hop", "--out", str(out), "--no-artifacts", *TINY]) == 0
+    bvh_path = tmp_path / "lamp.bvh"
+    assert main(["export", str(out), "--bvh", str(bvh_path)]) == 0
+    bvh = pytest.importorskip("bvh")
+    mocap = bvh.Bvh(bvh_path.read_text())
+    assert mocap.nframes == 31 and len(mocap.get_joints_names()) == 4   # 0.3 s at 100 fps

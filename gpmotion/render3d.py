@@ -1,0 +1,353 @@
+"""Pictures of 3-D motions: strobe filmstrips and GIFs (DESIGN.md §8), plus
+:func:`render_any`, which picks the planar or the 3-D renderer for a Trajectory.
+
+Like :mod:`gpmotion.render`, decoupled from the simulator: everything takes
+plain arrays.  Segments are ``float[F, n_seg, 2, 3]`` — frame, segment,
+endpoint (a, b), (x, y, z), z up — and each is drawn as a thick line with
+round caps whose width is 3/4 of the capsule's diameter at the scene's scale
+(limbs look like capsules, overlaid frames stay readable), with a dot at every
+segment end (the joints).
+
+matplotlib's ``mplot3d`` with a fixed camera (``elev``, ``azim``): every
+frame of a picture uses the same axis limits, taken from the whole motion,
+at equal scale on x, y and z (``set_box_aspect``).  The ground is a grid of
+lines every 0.25 m on z = ``ground_z`` (wider spacing on very large scenes,
+at most ~40 lines a side).  Limbo poles (x, z, radius) are horizontal bars
+along y, the goal is a gold star, ``targets`` (points, e.g. the object to
+touch) red dots.  Object API with an Agg canvas (no pyplot, no screen);
+outputs are written atomically (:func:`gpmotion.records.atomic_output`).
+Frames containing NaN/inf are skipped; no usable frame is a ValueError.
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.gridspec import GridSpec
+from mpl_toolkits.mplot3d import proj3d
+from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+from PIL import Image
+
+from gpmotion.records import atomic_output
+
+GRID = 0.25          # ground grid spacing (m)
+_MAX_GRID_LINES = 40
+
+
+# ------------------------------------------------------------------ input
+
+def _check_motion3d(segments, radii, times):
+    """Validated arrays and the indices of frames that are entirely finite."""
+    seg = np.asarray(segments, dtype=float)
+    if seg.ndim != 4 or seg.shape[2:] != (2, 3):
+        raise ValueError(f"segments must have shape [frames, n_seg, 2, 3], got {seg.shape}")
+    if seg.shape[0] == 0 or seg.shape[1] == 0:
+        raise ValueError(f"no frames or no segments to draw (shape {seg.shape})")
+    rad = np.asarray(radii, dtype=float).reshape(-1)
+    if rad.shape != (seg.shape[1],) or not np.all(np.isfinite(rad)) or np.any(rad < 0):
+        raise ValueError(f"radii must be {seg.shape[1]} finite values ≥ 0, got {rad}")
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if t.shape != (seg.shape[0],):
+        raise ValueError(f"times must have {seg.shape[0]} entries, got {t.shape[0]}")
+    ok = np.flatnonzero(np.isfinite(seg).all(axis=(1, 2, 3)) & np.isfinite(t))
+    if ok.size == 0:
+        raise ValueError("every frame contains NaN/inf: nothing to draw")
+    return seg, rad, t, ok
+
+
+def _check_scene3d(goal, targets, poles):
+    if goal is not None:
+        goal = np.asarray(goal, float).reshape(-1)
+        if goal.size == 2:                      # a planar goal (x, z)
+            goal = np.array([goal[0], 0.0, goal[1]])
+        if goal.size != 3 or not np.isfinite(goal).all():
+            goal = None
+    if targets is not None:
+        targets = np.asarray(targets, float).reshape(-1, 3)
+        targets = targets[np.isfinite(targets).all(1)]
+        if not len(targets):
+            targets = None
+    if poles is not None:
+        poles = np.asarray(poles, float).reshape(-1, 3)
+        poles = poles[np.isfinite(poles).all(1) & (poles[:, 2] > 0)]
+        if not len(poles):
+            poles = None
+    return goal, targets, poles
+
+
+def _pick(ok: np.ndarray, n: int) -> np.ndarray:
+    """At most ``n`` evenly spaced entries of ``ok``, first and last included."""
+    if n < 1:
+        raise ValueError(f"need at least one frame to draw, got {n}")
+    if ok.size <= n:
+        return ok
+    return ok[np.unique(np.linspace(0, ok.size - 1, n).round().astype(int))]
+
+
+def _limits(points, rad, ground_z, goal, targets, poles, pad=0.06):
+    """Axis limits (lo, hi) [3] holding every point, with a margin; every axis
+    spans at least a fifth of the widest one (and 0.2 m)."""
+    pts = points.reshape(-1, 3)
+    r = float(rad.max())
+    lo, hi = pts.min(0) - r, pts.max(0) + r
+    extra = [p for p in (goal, targets) if p is not None]
+    for p in extra:
+        p = np.asarray(p).reshape(-1, 3)
+        lo, hi = np.minimum(lo, p.min(0)), np.maximum(hi, p.max(0))
+    if poles is not None:
+        lo[[0, 2]] = np.minimum(lo[[0, 2]], (poles[:, :2] - poles[:, 2:3]).min(0))
+        hi[[0, 2]] = np.maximum(hi[[0, 2]], (poles[:, :2] + poles[:, 2:3]).max(0))
+    if ground_z is not None:
+        lo[2], hi[2] = min(lo[2], ground_z), max(hi[2], ground_z)
+    span = hi - lo
+    need = max(0.2, 0.2 * span.max())
+    grow = np.maximum(need - span, 0.0) / 2
+    lo, hi = lo - grow, hi + grow
+    m = pad * (hi - lo).max()
+    return lo - m, hi + m
+
+
+def _screen_aspect(lo, hi, elev, azim) -> float:
+    """Height / width of the box [lo, hi] as the camera sees it (orthographic)."""
+    a, e = np.radians(azim), np.radians(elev)
+    right = np.array([-np.sin(a), np.cos(a), 0.0])
+    up = np.array([-np.sin(e) * np.cos(a), -np.sin(e) * np.sin(a), np.cos(e)])
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    return float(np.ptp(corners @ up) / max(np.ptp(corners @ right), 1e-9))
+
+
+# ---------------------------------------------------------------- drawing
+
+def _setup(ax, lo, hi, elev, azim, small=False):
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(hi - lo), zoom=1.3 if small else 1.0)
+    ax.view_init(elev=elev, azim=azim)
+    ax.computed_zorder = False          # draw order: ground, then older → newer frames
+    if small:
+        ax.set_axis_off()
+    else:
+        for lab, setter in (("x (m)", ax.set_xlabel), ("y (m)", ax.set_ylabel), ("z (m)", ax.set_zlabel)):
+            setter(lab, fontsize=8, labelpad=-2)
+        ax.tick_params(labelsize=7, pad=0)
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.pane.set_alpha(0.15)
+
+
+def _ground(ax, lo, hi, ground_z, small=False):
+    if ground_z is None:
+        return
+    step = GRID
+    while max((hi[0] - lo[0]), (hi[1] - lo[1])) / step > _MAX_GRID_LINES:
+        step *= 2
+    xs = np.arange(np.ceil(lo[0] / step), np.floor(hi[0] / step) + 1) * step
+    ys = np.arange(np.ceil(lo[1] / step), np.floor(hi[1] / step) + 1) * step
+    quad = [[(lo[0], lo[1], ground_z), (hi[0], lo[1], ground_z),
+             (hi[0], hi[1], ground_z), (lo[0], hi[1], ground_z)]]
+    ax.add_collection3d(Poly3DCollection(quad, facecolors=[(0.85, 0.85, 0.85, 0.5)],
+                                         edgecolors="none"))
+    lines = ([[(x, lo[1], ground_z), (x, hi[1], ground_z)] for x in xs]
+             + [[(lo[0], y, ground_z), (hi[0], y, ground_z)] for y in ys])
+    if lines:
+        ax.add_collection3d(Line3DCollection(lines, colors="0.55", linewidths=0.3 if small else 0.5))
+
+
+def _markers(ax, lo, hi, goal, targets, poles, ppm, small=False):
+    if poles is not None:
+        bars = [[(x, lo[1], z), (x, hi[1], z)] for x, z, _ in poles]
+        ax.add_collection3d(Line3DCollection(bars, colors="tab:red", alpha=0.8,
+                                             linewidths=np.clip(2 * poles[:, 2] * ppm, 1, 40)))
+    if targets is not None:
+        ax.plot(targets[:, 0], targets[:, 1], targets[:, 2], ls="none", marker="o",
+                ms=4 if small else 8, color="tab:red", mec="k", mew=0.6)
+    if goal is not None:
+        ax.plot([goal[0]], [goal[1]], [goal[2]], ls="none", marker="*",
+                ms=7 if small else 14, color="gold", mec="k", mew=0.6)
+
+
+def _points_per_metre(ax, lo, hi) -> float:
+    """Display scale of the (laid out) 3-D axes: points per metre of the
+    least foreshortened coordinate axis, at the centre of the box."""
+    fig = ax.figure
+    M = ax.get_proj()
+    c = (lo + hi) / 2
+    d = 0.25 * (hi - lo).max()
+
+    def disp(p):
+        x, y, _ = proj3d.proj_transform(p[0], p[1], p[2], M)
+        return ax.transData.transform((x, y))
+
+    c0 = disp(c)
+    px = max(np.hypot(*(disp(c + d * e) - c0)) for e in np.eye(3)) / d
+    return float(px * 72.0 / fig.dpi)
+
+
+def _body_style(rad, ppm):
+    """Line widths (points): 3/4 of each capsule's diameter at the scene's
+    scale (a little slimmer than true, so overlaid frames stay readable)."""
+    return np.clip(1.5 * rad * ppm, 1.2, 60.0)
+
+
+def _draw_figure(ax, seg_frame, rad, color, ppm, alpha=1.0, joint_size=None):
+    """The figure at one frame: capsule-thick lines with round caps and dots
+    at the segment ends; returns (lines, dots) for animation."""
+    lw = _body_style(rad, ppm)
+    dark = tuple(0.55 * v for v in color[:3]) + (1.0,)
+    lines = Line3DCollection(seg_frame, colors=[color], linewidths=lw, alpha=alpha,
+                             capstyle="round", joinstyle="round")
+    ax.add_collection3d(lines)
+    pts = seg_frame.reshape(-1, 3)
+    ms = joint_size if joint_size is not None else float(np.clip(0.6 * lw.min(), 2.0, 7.0))
+    (dots,) = ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], ls="none", marker="o", ms=ms,
+                      color=dark, mec="none", alpha=alpha)
+    return lines, dots
+
+
+def _save_png(fig: Figure, path, dpi: int) -> None:
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=dpi)
+
+
+# -------------------------------------------------------------- filmstrip
+
+def filmstrip3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=None,
+                poles=None, n_frames: int = 8, title: str | None = None, elev: float = 15,
+                azim: float = -60, strip: bool = True, dpi: int = 110) -> None:
+    """Strobe picture of a 3-D motion, saved as PNG.
+
+    Top: the figure at ``n_frames`` evenly spaced finite frames overlaid in
+    one view, later frames darker, over the ground grid, with the goal
+    (x, y, z; a planar (x, z) is lifted to y = 0), target points ``[n, 3]``
+    and poles ``[n, 3]`` (x, z, radius).  Bottom (``strip=True``): the same
+    frames as small multiples at one common scale and camera, each centred
+    on the figure (x, y) and captioned with its time.
+    """
+    seg, rad, t, ok = _check_motion3d(segments, radii, times)
+    goal, targets, poles = _check_scene3d(goal, targets, poles)
+    frames = _pick(ok, n_frames)
+    lo, hi = _limits(seg[frames], rad, ground_z, goal, targets, poles)
+    n = len(frames)
+    width = float(np.clip(1.7 * n, 8.0, 16.0))
+    top_h = float(np.clip(0.75 * width * _screen_aspect(lo, hi, elev, azim), 3.0, 7.5))
+    # small multiples: one common box, centred on each frame's figure in x, y
+    pts = seg[frames].reshape(n, -1, 3)
+    mid_xy = 0.5 * (pts[..., :2].min(1) + pts[..., :2].max(1))
+    half = max(0.5 * np.ptp(pts[..., :2], axis=1).max() + rad.max(), 0.3 * (hi[2] - lo[2]), 0.1)
+    half *= 1.1
+    cell_h = float(np.clip(width / n * 1.05, 1.3, 3.0)) if strip else 0.0
+    fig = Figure(figsize=(width, top_h + cell_h + (0.3 if title else 0.1)))
+    FigureCanvasAgg(fig)
+    gs = GridSpec(2 if strip else 1, n, figure=fig, height_ratios=[top_h, cell_h] if strip else None,
+                  left=0.02, right=0.98, bottom=0.01, top=0.95 if title else 0.99, hspace=0.02,
+                  wspace=0.0)
+    ax = fig.add_subplot(gs[0, :], projection="3d")
+    _setup(ax, lo, hi, elev, azim)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    subs = []
+    if strip:
+        for k in range(n):
+            sub = fig.add_subplot(gs[1, k], projection="3d")
+            slo = np.array([mid_xy[k, 0] - half, mid_xy[k, 1] - half, lo[2]])
+            shi = np.array([mid_xy[k, 0] + half, mid_xy[k, 1] + half, hi[2]])
+            _setup(sub, slo, shi, elev, azim, small=True)
+            subs.append((sub, slo, shi))
+    fig.canvas.draw()          # lay out, so the display scale is known
+    cmap = colormaps["Blues"]
+    colors = [cmap(v) for v in np.linspace(0.35, 1.0, n)]
+    ppm = _points_per_metre(ax, lo, hi)
+    _ground(ax, lo, hi, ground_z)
+    _markers(ax, lo, hi, goal, targets, poles, ppm)
+    for i, c in zip(frames, colors):
+        _draw_figure(ax, seg[i], rad, c, ppm, alpha=0.9)
+    for (sub, slo, shi), i, c in zip(subs, frames, colors):
+        sppm = _points_per_metre(sub, slo, shi)
+        _ground(sub, slo, shi, ground_z, small=True)
+        _markers(sub, slo, shi, goal, targets, poles, sppm, small=True)
+        _draw_figure(sub, seg[i], rad, c, sppm)
+        sub.text2D(0.5, 0.97, f"t={t[i]:.2f}s", transform=sub.transAxes, ha="center",
+                   va="top", fontsize=7)
+    _save_png(fig, path, dpi)
+
+
+# ---------------------------------------------------------------- animate
+
+def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=None,
+              poles=None, fps: int = 25, max_frames: int = 150, title: str | None = None,
+              elev: float = 15, azim: float = -60, dpi: int = 80) -> int:
+    """An animated GIF of a 3-D motion; returns the number of frames written.
+
+    Frames are subsampled evenly to at most ``max_frames``; the camera and
+    axis limits come from the whole motion so they stay still; the recorded
+    time is shown in a corner.  Frames are palette-quantized as drawn.
+    """
+    seg, rad, t, ok = _check_motion3d(segments, radii, times)
+    goal, targets, poles = _check_scene3d(goal, targets, poles)
+    if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
+        raise ValueError(f"fps must be in (0, 100], got {fps!r}")
+    frames = _pick(ok, int(max_frames))
+    lo, hi = _limits(seg[ok], rad, ground_z, goal, targets, poles)
+    fig = Figure(figsize=(6.0, float(np.clip(6.0 * _screen_aspect(lo, hi, elev, azim), 3.5, 7.0))))
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.0, 0.0, 1.0, 0.94 if title else 1.0), projection="3d")
+    _setup(ax, lo, hi, elev, azim)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.canvas.draw()
+    ppm = _points_per_metre(ax, lo, hi)
+    _ground(ax, lo, hi, ground_z)
+    _markers(ax, lo, hi, goal, targets, poles, ppm)
+    lines, dots = _draw_figure(ax, seg[frames[0]], rad, colormaps["Blues"](0.85), ppm)
+    clock = ax.text2D(0.02, 0.97, "", transform=ax.transAxes, va="top",
+                      family="monospace", fontsize=9)
+    images = []
+    for i in frames:
+        lines.set_segments(seg[i])
+        p = seg[i].reshape(-1, 3)
+        dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
+        clock.set_text(f"t = {t[i]:6.2f} s")
+        fig.canvas.draw()
+        rgba = np.asarray(fig.canvas.buffer_rgba())
+        images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
+            256, method=Image.Quantize.MEDIANCUT))
+    with atomic_output(path) as tmp:
+        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                       duration=max(int(round(1000 / fps)), 20), loop=0)
+    return len(images)
+
+
+# ------------------------------------------------------------- dispatcher
+
+def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, targets=None) -> None:
+    """Filmstrip PNG and/or GIF of episode ``e`` of a Trajectory: the planar
+    renderer (:mod:`gpmotion.render`) for planar figures, the 3-D one otherwise.
+
+    Scene: ground (if any), limbo poles and the goal come from ``traj.scene``
+    (a 3-D figure's goal is the scene's (x, z) at y = 0, as the kernel sees it);
+    ``targets`` (3-D only): extra points ``[n, 3]`` to mark.
+    """
+    from .model import Model
+    if not 0 <= e < traj.n_episodes:
+        raise ValueError(f"episode {e} out of range (the trajectory has {traj.n_episodes})")
+    sc = traj.scene
+    seg = traj.segments()[e]
+    radii = traj.figure.model.seg_r
+    poles = sc.poles if len(sc.poles) else None
+    ground_z = sc.ground_z if sc.ground else None
+    if isinstance(traj.figure.model, Model):
+        from . import render
+        kw = dict(poles=poles, ground_z=ground_z, goal=tuple(sc.goal), title=title)
+        if filmstrip:
+            render.filmstrip(filmstrip, seg, radii, traj.times, **kw)
+        if gif:
+            render.animate(gif, seg, radii, traj.times, **kw)
+        return
+    goal = (float(sc.goal[0]), 0.0, float(sc.goal[1]))
+    kw = dict(poles=poles, ground_z=ground_z, goal=goal, targets=targets, title=title)
+    if filmstrip:
+        filmstrip3d(filmstrip, seg, radii, traj.times, **kw)
+    if gif:
+        animate3d(gif, seg, radii, traj.times, **kw)
