@@ -132,20 +132,24 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
     else:       # validate everything before touching the disk
         task, family, search, actuation = build(cfg)
         rd = RunDir.create(out, force=force)
-    if not quiet:
-        print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
-              f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
     evals = 0
     elapsed0 = 0.0
     if resume and rd.checkpoint_path.exists():
         ck = rd.load_checkpoint()
-        search.load_state_dict(ck["search"])
-        evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
+        try:
+            search.load_state_dict(ck["search"])
+            evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as e:
+            from .records import FormatError
+            raise FormatError(f"{rd.checkpoint_path}: not a valid checkpoint ({e!r:.200})") from None
         _trim_log(rd, evals)
     elif not resume:
         rd.write_config({"run": cfg.to_json(), "task_config": task.config(),
                          "family_config": family.config(), "actuation": actuation,
                          "versions": _versions(), "spec": spec_of(task, family, actuation, cfg.plugins)})
+    if not quiet:
+        print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
+              f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
     evaluator = _evaluator(cfg, task, family, actuation)
     prog = Progress(search.total, quiet)
     t0 = time.perf_counter() - elapsed0
