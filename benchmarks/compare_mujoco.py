@@ -1,4 +1,4 @@
-"""gpmotion's planar kernel against MuJoCo on the same lamp, two workloads.
+"""gpmotion's kernels against MuJoCo: the lamp (planar, two workloads) and the humanoid (3-D).
 
     python benchmarks/compare_mujoco.py [--quick] [--json] [--episodes N] [--seconds S]
 
@@ -13,7 +13,15 @@
    ``deap.gp.compile``d trees, writes ``data.ctrl`` and calls
    ``mujoco.mj_step`` (:func:`mujoco_gp_loop`).  Bar: ours ≥ 10× that loop on
    one thread; goal ≥ 25×.
-3. A correctness cross-check: a passive double pendulum, no contact, from the
+3. **Humanoid** (``humanoid``): the 3-D humanoid ``herman`` (29 links, fixed
+   pelvis, 6 foot contacts; a similar humanoid of our own if herman is not
+   registered) with sine targets on every actuator, ours vs MuJoCo's C
+   ``rollout`` — model generated from the compiled 3-D arrays
+   (:func:`mjcf_from_figure3d`).  Bar: ours ≥ 0.5× MuJoCo on one thread;
+   goal: faster.
+4. Correctness cross-checks: a passive double pendulum (planar), and a
+   passive 3-D double pendulum whose second hinge axis is tilted out of
+   the first's plane (:func:`pendulum3d_crosscheck`), no contact, from the
    same initial state in both engines.
 
 Prints a summary, or one JSON object with every number (``--json``).
@@ -436,6 +444,256 @@ def pendulum_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
     return out
 
 
+# ------------------------------------------------------------------ 3-D: the humanoid
+
+def mjcf_from_figure3d(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator="Euler",
+                       dt=1e-3) -> str:
+    """An MJCF string for a compiled 3-D gpmotion figure (``Model3D`` arrays).
+
+    Per link: a body at ``xpos`` turned by ``xrot`` (its joint frame), one
+    hinge / slide joint about ``axis`` at the body origin, ``<inertial>`` with
+    the link's mass, centre of mass and full 3×3 ``icom``.  A massless link
+    whose only child sits at its origin with no rest rotation (the inner
+    links of an Euler-joint chain) lends its joint to the child's body:
+    MuJoCo applies a body's joints in order, each about the already-turned
+    frame, which is our chain.  A fixed root is the world (links hanging
+    from it carry the root placement in ``xrot``/``xpos``).  PD servos are
+    ``<position>`` actuators (kp, kv = our kd, ctrlrange = joint limits,
+    forcerange = ± torque limit), contact points 1 mm spheres against a
+    plane (μ = the scene's), integrator Euler, no visual geoms.
+    """
+    from gpmotion.figures.spec3d import rot_to_quat
+    from gpmotion.model import FREE3D, HINGE3D
+    m = fig.model
+    nl = len(m.parent)
+    children = {i: [] for i in range(-1, nl)}
+    for i in range(nl):
+        children[int(m.parent[i])].append(i)
+    merged_into = {}
+    for i in range(nl):
+        kids = children[i]
+        if (m.mass[i] == 0.0 and len(kids) == 1 and not np.any(m.xpos[kids[0]])
+                and np.allclose(m.xrot[kids[0]], np.eye(3), atol=0, rtol=0)
+                and m.jtype[i] != FREE3D):
+            merged_into[i] = kids[0]
+    names = fig.link_names
+
+    def joint_xml(i):
+        if m.jtype[i] == FREE3D:
+            return f'<freejoint name="{names[i]}"/>'
+        d = int(m.dadr[i])
+        kind = "hinge" if m.jtype[i] == HINGE3D else "slide"
+        lim = ""
+        if np.isfinite(m.lo[d]) and np.isfinite(m.hi[d]):
+            lim = f' limited="true" range="{_f(m.lo[d], m.hi[d])}"'
+        return (f'<joint name="{names[i]}" type="{kind}" axis="{_f(*m.axis[i])}"'
+                f' damping="{_f(m.damping[d])}"{lim}/>')
+
+    def body_xml(first, depth):
+        chain = [first]
+        while chain[-1] in merged_into:
+            chain.append(merged_into[chain[-1]])
+        i = chain[-1]
+        pad = "  " * depth
+        out = [f'{pad}<body name="link_{names[i]}" pos="{_f(*m.xpos[first])}" '
+               f'quat="{_f(*rot_to_quat(m.xrot[first]))}">']
+        out += [pad + "  " + joint_xml(j) for j in chain]
+        if m.mass[i] > 0:
+            I = m.icom[i]
+            out.append(f'{pad}  <inertial pos="{_f(*m.com[i])}" mass="{_f(m.mass[i])}" '
+                       f'fullinertia="{_f(I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])}"/>')
+        for k in range(len(m.cp_link)):
+            if m.cp_link[k] == i:
+                out.append(f'{pad}  <geom name="cp_{fig.contact_names[k]}" type="sphere" '
+                           f'size="{contact_radius}" pos="{_f(*m.cp_pos[k])}" contype="1" '
+                           f'conaffinity="0" condim="3" friction="{_f(scene.mu)} 0.005 0.0001"/>')
+        for c in children[i]:
+            out += body_xml(c, depth + 1)
+        out.append(f"{pad}</body>")
+        return out
+
+    bodies = []
+    for c in children[-1]:
+        bodies += body_xml(c, 2)
+    acts = []
+    for a in range(len(m.act_dof)):
+        d = int(m.act_dof[a])
+        link = int(np.nonzero((m.dadr == d) & (m.jtype != FREE3D))[0][0])
+        acts.append(f'    <position joint="{names[link]}" kp="{_f(m.kp[a])}" kv="{_f(m.kd[a])}" '
+                    f'ctrllimited="true" ctrlrange="{_f(m.lo[d], m.hi[d])}" '
+                    f'forcelimited="true" forcerange="{_f(-m.tau_max[a], m.tau_max[a])}"/>')
+    ground = ""
+    if scene.ground:
+        ground = (f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {_f(scene.ground_z)}" '
+                  f'contype="0" conaffinity="1"/>')
+    return "\n".join([
+        f'<mujoco model="{fig.name}">',
+        '  <compiler angle="radian" inertiafromgeom="false" autolimits="false"/>',
+        f'  <option timestep="{_f(dt)}" gravity="0 0 {_f(-scene.gravity)}" integrator="{integrator}"/>',
+        "  <worldbody>", ground, *bodies, "  </worldbody>",
+        "  <actuator>", *acts, "  </actuator>",
+        "</mujoco>"])
+
+
+def humanoid_figure():
+    """herman when it is registered, else a similar humanoid of our own (fixed pelvis)."""
+    from gpmotion.figures import figure_names
+    if "herman" in figure_names():
+        return gpmotion.load_figure("herman")
+    return gpmotion.load_figure(FALLBACK_HUMANOID)
+
+
+def _fallback_humanoid():
+    g = dict(kp=300.0, kd=10.0, torque_limit=200.0)
+
+    def rod(name, length, mass, d):
+        return {"name": name, "mass": mass, "radius": 0.04,
+                "segment": [[0, 0, 0], [length * x for x in d]]}
+    B = [{"name": "pelvis", "mass": 10.0, "radius": 0.1, "segment": [[0, -0.12, 0], [0, 0.12, 0]]},
+         rod("torso", 0.45, 25.0, (0, 0, 1)), rod("head", 0.2, 5.0, (0, 0, 1))]
+    J = [dict(name="waist", parent="pelvis", child="torso", offset=[0, 0, 0.08], type="euler",
+              axes="yxz", limits=[-0.8, 0.8], **g),
+         dict(name="neck", parent="torso", child="head", offset=[0, 0, 0.45], type="euler",
+              axes="yz", limits=[-0.8, 0.8], **g)]
+    C = []
+    for side, y in (("l", 0.1), ("r", -0.1)):
+        B += [rod(f"thigh_{side}", 0.42, 7.0, (0, 0, -1)), rod(f"shin_{side}", 0.4, 3.5, (0, 0, -1)),
+              rod(f"foot_{side}", 0.2, 1.0, (1, 0, 0)), rod(f"upper_arm_{side}", 0.3, 2.0, (0, 0, -1)),
+              rod(f"fore_arm_{side}", 0.26, 1.1, (0, 0, -1)), rod(f"hand_{side}", 0.1, 0.4, (0, 0, -1))]
+        J += [dict(name=f"hip_{side}", parent="pelvis", child=f"thigh_{side}", offset=[0, y, 0],
+                   type="euler", axes="yxz", limits=[-1.5, 1.5], **g),
+              dict(name=f"knee_{side}", parent=f"thigh_{side}", child=f"shin_{side}",
+                   offset=[0, 0, -0.42], axis=[0, 1, 0], limits=[0.0, 2.5], **g),
+              dict(name=f"ankle_{side}", parent=f"shin_{side}", child=f"foot_{side}",
+                   offset=[0, 0, -0.4], type="euler", axes="yx", limits=[-0.8, 0.8], **g),
+              dict(name=f"shoulder_{side}", parent="torso", child=f"upper_arm_{side}",
+                   offset=[0, 2.2 * y, 0.38], type="euler", axes="yzx", limits=[-2.0, 2.0], **g),
+              dict(name=f"elbow_{side}", parent=f"upper_arm_{side}", child=f"fore_arm_{side}",
+                   offset=[0, 0, -0.3], axis=[0, -1, 0], limits=[0.0, 2.5], **g),
+              dict(name=f"wrist_{side}", parent=f"fore_arm_{side}", child=f"hand_{side}",
+                   offset=[0, 0, -0.26], type="euler", axes="yx", limits=[-0.8, 0.8], **g)]
+        C += [dict(name=f"heel_{side}", body=f"foot_{side}", position=[-0.05, 0, -0.03]),
+              dict(name=f"toe_{side}", body=f"foot_{side}", position=[0.2, 0, -0.03])]
+    return {"dimensions": 3, "name": "humanoid_bench",
+            "root": {"type": "fixed", "body": "pelvis", "position": [0, 0, 0.96]},
+            "bodies": B, "joints": J, "contacts": C}
+
+
+FALLBACK_HUMANOID = _fallback_humanoid()
+
+
+def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25):
+    """Ours vs MuJoCo's C ``rollout`` on the 3-D humanoid (herman), sine targets on
+    every actuator changing every step (amplitude ``amplitude`` × the sine
+    workload's), one thread and all threads."""
+    import mujoco as mj
+    from mujoco import rollout as mjr
+
+    fig = humanoid_figure()
+    scene = gpmotion.make_scene()
+    dt = 1e-3
+    n_steps = int(round(seconds / dt))
+    off, amp, om, ph = sine_workload(fig, episodes, seed)
+    amp = amplitude * amp
+    ctrl = schedule.sines(off, amp, om, ph)
+    run = lambda th: gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, dt=dt, threads=th)
+    tr = run(1)
+    ours1 = _best(lambda: run(1), repeats)
+    oursn = _best(lambda: run(threads), repeats)
+    xml = mjcf_from_figure3d(fig, scene, dt=dt)
+    model = mj.MjModel.from_xml_string(xml)
+    assert model.nq == fig.nq and model.nu == fig.n_act, (model.nq, model.nu)
+    t = np.arange(n_steps) * dt
+    control = np.ascontiguousarray(off[:, None, :] + amp[:, None, :] *
+                                   np.sin(om[:, None, :] * t[None, :, None] + ph[:, None, :]))
+    init = _initial_states(mj, model, np.tile(fig.q_default, (episodes, 1)),
+                           np.zeros((episodes, fig.nv)))
+    state = np.zeros((episodes, n_steps, init.shape[1]))
+    sens = np.zeros((episodes, n_steps, 0))
+    data1 = mj.MjData(model)
+    datan = [mj.MjData(model) for _ in range(threads)]
+    with mjr.Rollout(nthread=0) as r1, mjr.Rollout(nthread=threads) as rn:
+        def mj1():
+            r1.rollout(model, data1, init, control, state=state, sensordata=sens)
+
+        def mjn():
+            rn.rollout(model, datan, init, control, state=state, sensordata=sens)
+        mj1()
+        mujoco1 = _best(mj1, repeats)
+        mjn()
+        mujocon = _best(mjn, repeats)
+    # the engines' joint angles over the episode (PD-driven, so they stay close)
+    q_mj = state[:, ::tr.record_every, 1:1 + fig.nq]
+    F = min(q_mj.shape[1], tr.q.shape[1])
+    steps = episodes * n_steps
+    ratio = mujoco1 / ours1
+    return {
+        "workload": {"figure": fig.name, "episodes": episodes, "steps_per_episode": n_steps,
+                     "dt": dt, "links": int(len(fig.model.parent)), "dofs": int(fig.nv),
+                     "actuators": int(fig.n_act), "contacts": int(len(fig.model.cp_link)),
+                     "controls": f"per-episode random sines on every actuator ({amplitude:g} × "
+                                 "the bench amplitudes), changing every step",
+                     "mujoco_integrator": "Euler", "mujoco_nq": model.nq, "mujoco_nu": model.nu,
+                     "mujoco_nbody": model.nbody},
+        "ours_steps_per_s": steps / ours1,
+        "ours_steps_per_s_all_threads": steps / oursn,
+        "mujoco_steps_per_s": steps / mujoco1,
+        "mujoco_steps_per_s_all_threads": steps / mujocon,
+        "ratio_one_thread": ratio,
+        "ratio_all_threads": mujocon / oursn,
+        "threads": threads,
+        "bar_one_thread": 0.5,
+        "meets_bar": bool(ratio >= 0.5),
+        "meets_goal": bool(ratio >= 1.0),
+        "ours_diverged": int(tr.diverged.sum()),
+        "ours_contact_frames": float((tr.contact_force.sum(axis=-1) > 0).mean()),
+        "max_joint_angle_diff_vs_mujoco": float(np.abs(q_mj[:, :F] - tr.q[:, :F]).max()),
+    }
+
+
+PENDULUM3D = {
+    "dimensions": 3, "name": "double_pendulum_3d",
+    "root": {"type": "fixed", "body": "mount", "position": [0, 0, 2.0]},
+    "bodies": [{"name": "mount", "mass": 1.0, "radius": 0.01, "segment": [[0, 0, 0], [0.1, 0, 0]]},
+               {"name": "l0", "mass": 1.0, "radius": 0.03, "segment": [[0, 0, 0], [0, 0.1, -1.0]],
+                "inertia": [0.09, 0.085, 0.01]},
+               {"name": "l1", "mass": 0.6, "radius": 0.02, "segment": [[0, 0, 0], [0.2, 0, -0.7]],
+                "inertia": [[0.03, 0.002, -0.004], [0.002, 0.028, 0.001], [-0.004, 0.001, 0.012]]}],
+    "joints": [{"name": "j0", "parent": "mount", "child": "l0", "offset": [0, 0, 0], "type": "hinge",
+                "axis": [0, 1, 0], "limits": [-10, 10], "actuated": False},
+               {"name": "j1", "parent": "l0", "child": "l1", "offset": [0, 0.1, -1.0],
+                "rotation": [0.3, 0.0, 0.2], "type": "hinge", "axis": [1, 0.5, 0.3],
+                "limits": [-10, 10], "actuated": False}],
+}
+
+
+def pendulum3d_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
+    """Max |Δθ| between the engines for a passive 3-D double pendulum whose second
+    hinge axis is not parallel to the first (tilted, in a rotated joint frame)."""
+    import mujoco as mj
+
+    fig = gpmotion.load_figure(PENDULUM3D)
+    scene = gpmotion.make_scene(ground=False)
+    n = int(round(seconds / dt))
+    tr = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt, record_every=1)
+    ours = tr.q[0]
+    out = {"seconds": seconds, "q0": list(q0), "dt": dt,
+           "axes_world_at_rest": [list(map(float, a)) for a in fig.model.axis]}
+    for integ in ("Euler", "RK4"):
+        model = mj.MjModel.from_xml_string(mjcf_from_figure3d(fig, scene, integrator=integ, dt=dt))
+        d = mj.MjData(model)
+        d.qpos[:] = q0
+        theirs = [d.qpos.copy()]
+        for _ in range(n):
+            mj.mj_step(model, d)
+            theirs.append(d.qpos.copy())
+        out[f"max_angle_diff_{integ}"] = float(np.abs(np.array(theirs) - ours).max())
+    half = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt / 2, record_every=2)
+    out["ours_dt_vs_dt_half"] = float(np.abs(half.q[0] - ours).max())
+    out["swing_amplitude"] = float(np.abs(ours).max())
+    return out
+
+
 def format_summary(r: dict) -> str:
     lines = []
     if "ours_steps_per_s" in r:
@@ -464,6 +722,23 @@ def format_summary(r: dict) -> str:
                   f"senses at a common state: max |Δ| {g['senses_initial_max_abs_diff']:.2g}; "
                   f"contact: ours {100 * g['ours_contact_frames']:.0f}% of frames, MuJoCo "
                   f"{100 * g['mujoco_contact_steps']:.0f}% of steps"]
+    if "humanoid" in r:
+        h, w = r["humanoid"], r["humanoid"]["workload"]
+        lines += [f"humanoid — {w['figure']} ({w['links']} links, {w['dofs']} dof, {w['contacts']} "
+                  f"contacts), {w['episodes']} episodes × {w['steps_per_episode']} steps, sine targets "
+                  f"(MuJoCo: C rollout, controls precomputed)",
+                  f"  ours    {h['ours_steps_per_s'] / 1e6:8.3f} M steps/s one thread, "
+                  f"{h['ours_steps_per_s_all_threads'] / 1e6:.3f} M on {h['threads']}",
+                  f"  MuJoCo  {h['mujoco_steps_per_s'] / 1e6:8.3f} M steps/s one thread, "
+                  f"{h['mujoco_steps_per_s_all_threads'] / 1e6:.3f} M on {h['threads']}",
+                  f"  ratio   {h['ratio_one_thread']:8.2f}× one thread (bar {h['bar_one_thread']:g}×: "
+                  f"{'met' if h['meets_bar'] else 'NOT met'}; goal 1×: "
+                  f"{'met' if h['meets_goal'] else 'not met'}), {h['ratio_all_threads']:.2f}× all threads"]
+    if "pendulum3d_crosscheck" in r:
+        c = r["pendulum3d_crosscheck"]
+        lines.append(f"3-D pendulum cross-check (tilted second axis): max |Δθ| vs MuJoCo Euler "
+                     f"{c['max_angle_diff_Euler']:.2g} rad, RK4 {c['max_angle_diff_RK4']:.2g} "
+                     f"(ours dt vs dt/2: {c['ours_dt_vs_dt_half']:.2g})")
     if "pendulum_crosscheck" in r:
         c = r["pendulum_crosscheck"]
         lines.append(f"pendulum cross-check: max |Δθ| vs MuJoCo Euler {c['max_angle_diff_Euler']:.2g} rad, "
@@ -477,7 +752,10 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--json", action="store_true", help="print one JSON object with every number")
-    p.add_argument("--only", choices=["sine", "gp"], help="run one workload (default: both)")
+    p.add_argument("--only", choices=["sine", "gp", "humanoid"],
+                   help="run one workload (default: all)")
+    p.add_argument("--humanoid-seconds", type=float, default=None,
+                   help="simulated seconds per episode, humanoid workload (default 2, quick 0.5)")
     p.add_argument("--episodes", type=int, default=None, help="episodes per batch (ours)")
     p.add_argument("--seconds", type=float, default=None,
                    help="simulated seconds per episode, sine workload (GP: lamp_hop's 3 s)")
@@ -501,7 +779,10 @@ def main(argv=None):
     if a.only in (None, "gp"):
         result["gp"] = compare_lamp_gp(episodes, max(repeats, 5), threads, py_episodes,
                                        seconds=a.gp_seconds)
+    if a.only in (None, "humanoid"):
+        result["humanoid"] = compare_humanoid(episodes, a.humanoid_seconds or seconds, repeats, threads)
     result["pendulum_crosscheck"] = pendulum_crosscheck()
+    result["pendulum3d_crosscheck"] = pendulum3d_crosscheck()
     result["versions"] = {"mujoco": mujoco.__version__, "numba": numba.__version__,
                           "numpy": np.__version__, "cpu_count": os.cpu_count()}
     print(json.dumps(result, indent=2) if a.json else format_summary(result))

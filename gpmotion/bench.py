@@ -7,13 +7,20 @@ lands and hops: the contact code is exercised, not skipped.  Two controllers:
 * ``--controller sine`` (default): each episode drives every actuated joint
   with ``offset + amplitude·sin(ω t + φ)`` (the ``schedule.sines``
   controller) with its own random frequencies;
-* ``--controller gp`` (lamp only): the lamp driven *in-kernel* by three
+* ``--controller gp`` (lamp and herman): the figure driven *in-kernel* by
   random GP trees (:func:`bench_gp_trees`: ramped half-and-half trees over
-  the ``lamp_hop`` primitive set, fixed seed, rejection-sampled to 30–40
-  nodes each), from ``lamp_hop``'s scene and initial state, episodes of
-  ``lamp_hop``'s length (3 s) unless ``--seconds`` says otherwise.  Every
-  episode runs the same three trees; ``benchmarks/compare_mujoco.py`` runs
-  the same trees in a MuJoCo + ``deap.gp.compile`` Python loop.
+  the primitive set of the figure's GP bench task, fixed seed, rejection-
+  sampled to a node-count window), from that task's scene and initial
+  state, episodes of the task's length unless ``--seconds`` says otherwise.
+  Every episode runs the same trees.
+
+  - lamp: ``lamp_hop``, three trees of 30–40 nodes (3 s episodes);
+    ``benchmarks/compare_mujoco.py`` runs the same trees in a MuJoCo +
+    ``deap.gp.compile`` Python loop;
+  - herman (the 3-D humanoid, fixed pelvis, 29 dof, 6 foot contacts):
+    ``herman_touch_nose``, one tree per right-arm actuator (six) of 20–30
+    nodes; the other 23 joints hold their neutral pose with PD servos
+    (1.5 s episodes).  ``--figure herman`` uses this controller by default.
 
 Reported (one JSON object with ``--json``):
 
@@ -80,16 +87,22 @@ CONTROLLERS = ("sine", "gp")
 GP_TREE_SEED = 0
 GP_TREE_NODES = (30, 40)          # inclusive node-count window of each benchmark tree
 GP_TREE_DEPTH = (2, 6)            # ramped half-and-half depth range
+# figure → (GP bench task, node-count window of its trees)
+GP_BENCH_TASKS = {"lamp": ("lamp_hop", GP_TREE_NODES), "herman": ("herman_touch_nose", (20, 30))}
 
 
-def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] = GP_TREE_NODES,
-                   depth: tuple[int, int] = GP_TREE_DEPTH, max_tries: int = 100_000):
-    """The benchmark's GP controller: ``(task, family, trees)`` for ``lamp_hop``.
+def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] | None = None,
+                   depth: tuple[int, int] = GP_TREE_DEPTH, max_tries: int = 100_000,
+                   figure: str = "lamp"):
+    """The benchmark's GP controller: ``(task, family, trees)`` for a figure's GP
+    bench task (``GP_BENCH_TASKS``: ``lamp_hop`` for the lamp, ``herman_touch_nose``
+    for herman).
 
-    ``trees`` is one token list per actuated joint (three for the lamp), each a
-    ramped half-and-half tree of the ``lamp_hop`` primitive set whose node
-    count lies in ``nodes`` (rejection sampling).  Deterministic for a seed;
-    Python's global ``random`` state (DEAP's generator) is restored after.
+    ``trees`` is one token list per controlled actuator (three for the lamp, the
+    six right-arm actuators for herman), each a ramped half-and-half tree of
+    the task's primitive set whose node count lies in ``nodes`` (default: the
+    figure's window; rejection sampling).  Deterministic for a seed; Python's
+    global ``random`` state (DEAP's generator) is restored after.
     """
     import random
 
@@ -99,9 +112,10 @@ def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] = GP_TREE_NO
     from .gp.bytecode import tree_to_tokens
     from .task import get_task
 
-    task = get_task("lamp_hop")
+    task_name, default_nodes = GP_BENCH_TASKS[figure]
+    task = get_task(task_name)
     fam = make_family("gp", task)
-    lo, hi = nodes
+    lo, hi = nodes or default_nodes
     saved = random.getstate()
     try:
         random.seed(seed)
@@ -145,8 +159,9 @@ def _warm_start(figure: str, runs: int = 2) -> tuple[float, float]:
     return min(walls[1:]), min(inner[1:])
 
 
-def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dict:
-    """Random GP controllers (ramped half-and-half, depth 2..6) on lamp_hop."""
+def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0,
+              task_name: str = "lamp_hop") -> dict:
+    """Random GP controllers (ramped half-and-half, depth 2..6) on a task (lamp_hop)."""
     import random
 
     from deap import gp
@@ -155,7 +170,7 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dic
     from .families import make_family
     from .task import get_task
 
-    task = get_task("lamp_hop")
+    task = get_task(task_name)
     fam = make_family("gp", task)
     saved = random.getstate()
     random.seed(seed)
@@ -172,7 +187,7 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0) -> dic
 def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int | None = None,
               threads: int | None = None, *, quick: bool = False, repeats: int | None = None,
               gp: bool = True, warm_start: bool = True, seed: int = 0,
-              controller: str = "sine") -> dict:
+              controller: str | None = None) -> dict:
     """Measure simulator throughput; returns a JSON-able dict (see the module doc)."""
     import numba
 
@@ -187,16 +202,20 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
     max_threads = numba.config.NUMBA_NUM_THREADS
     threads = int(min(threads or max_threads, max_threads))
 
+    fig = gpmotion.load_figure(figure)
+    if controller is None:                         # herman: the GP arm; others: sines
+        controller = "gp" if fig.name == "herman" else "sine"
     if controller not in CONTROLLERS:
         raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
-    fig = gpmotion.load_figure(figure)
     tree_nodes = None
+    gp_task = None
     q0 = qd0 = None
     if controller == "gp":
-        if fig.name != "lamp":
-            raise ValueError(f"--controller gp runs the lamp_hop trees: needs figure lamp, "
+        if fig.name not in GP_BENCH_TASKS:
+            raise ValueError(f"--controller gp needs --figure {' or '.join(GP_BENCH_TASKS)}, "
                              f"got {fig.name!r}")
-        task, fam, trees = bench_gp_trees(seed)
+        task, fam, trees = bench_gp_trees(seed, figure=fig.name)
+        gp_task = task.name
         tree_nodes = [len(t) for t in trees]
         scene = task.scene()
         q0, qd0 = task.initial_state()
@@ -225,6 +244,13 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
         "figure": fig.name,
         "controller": controller,
         "tree_nodes": tree_nodes,
+        "gp_controlled": ([fig.actuator_names[a] for a in fam.actuators]
+                          if controller == "gp" else None),
+        "gp_controller_task": gp_task,
+        "dimensions": fig.dimensions,
+        "links": int(len(fig.model.parent)),
+        "dofs": int(fig.nv),
+        "contacts": int(len(fig.model.cp_link)),
         "episodes": episodes,
         "steps": steps,
         "steps_per_episode": steps // episodes,
@@ -247,18 +273,21 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
     }
     if warm_start:
         result["warm_start_s"], result["warm_start_inner_s"] = _warm_start(fig.name)
-    if gp and fig.name == "lamp":
-        result.update(_gp_bench(cfg["gp_population"], threads, repeats, seed))
+    if gp and fig.name in GP_BENCH_TASKS:
+        result.update(_gp_bench(cfg["gp_population"], threads, repeats, seed,
+                                GP_BENCH_TASKS[fig.name][0]))
     return result
 
 
 def format_report(r: dict) -> str:
     if r.get("controller") == "gp":
         what = (f"{len(r['tree_nodes'])} random GP trees in-kernel "
-                f"({'/'.join(map(str, r['tree_nodes']))} nodes)")
+                f"({'/'.join(map(str, r['tree_nodes']))} nodes"
+                f"{', ' + r['gp_controller_task'] if r.get('gp_controller_task') else ''})")
     else:
         what = "sine targets every step"
-    lines = [f"gpmotion bench — figure {r['figure']}, {r['episodes']} episodes × "
+    lines = [f"gpmotion bench — figure {r['figure']} ({r.get('dimensions', 2)}-D, "
+             f"{r.get('links', '?')} links, {r.get('contacts', '?')} contacts), {r['episodes']} episodes × "
              f"{r['steps_per_episode']} steps (dt {r['dt'] * 1e3:g} ms), {what}",
              f"  one thread        {r['steps_per_s'] / 1e6:8.3f} M steps/s",
              f"  {r['threads']} threads{' ' * (9 - len(str(r['threads'])))}"
@@ -279,9 +308,11 @@ def format_report(r: dict) -> str:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gpmotion bench", description="simulator throughput benchmark")
     p.add_argument("--figure", default="lamp", help="figure name (default: lamp)")
-    p.add_argument("--controller", choices=CONTROLLERS, default="sine",
-                   help="what drives the joints: per-episode sines (default) or three random "
-                        "~35-node GP trees in-kernel (lamp only; lamp_hop episodes)")
+    p.add_argument("--controller", choices=CONTROLLERS, default=None,
+                   help="what drives the joints: per-episode sines (default; herman: gp) or "
+                        "random GP trees in-kernel (lamp: three ~35-node trees, lamp_hop "
+                        "episodes; herman: six 20-30-node trees on the right arm, "
+                        "herman_touch_nose episodes)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quick", action="store_true", help="CI-sized run (seconds, not minutes)")
     p.add_argument("--seconds", type=float, default=None, help="simulated seconds per episode")
@@ -304,9 +335,9 @@ def main(argv=None) -> int:
         if v is not None and not (np.isfinite(v) and v > 0):
             print(f"gpmotion bench: --{name} must be > 0, got {v}", file=sys.stderr)
             return 2
-    if args.controller == "gp" and args.figure != "lamp":
-        print(f"gpmotion bench: --controller gp runs the lamp_hop trees; it needs --figure lamp, "
-              f"got {args.figure!r}", file=sys.stderr)
+    if args.controller == "gp" and args.figure not in GP_BENCH_TASKS:
+        print(f"gpmotion bench: --controller gp runs a task's GP trees; it needs --figure "
+              f"{' or --figure '.join(GP_BENCH_TASKS)}, got {args.figure!r}", file=sys.stderr)
         return 2
     r = run_bench(args.figure, args.seconds, args.episodes, args.threads, quick=args.quick,
                   gp=not args.no_gp, warm_start=not args.no_warm_start,

@@ -141,7 +141,7 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
     state = random.getstate()
     random.seed(seed)
     try:
-        genomes = [[dgp.PrimitiveTree(dgp.genHalfAndHalf(fam.pset, 1, 4)) for _ in range(t.fig.n_act)]
+        genomes = [[dgp.PrimitiveTree(dgp.genHalfAndHalf(fam.pset, 1, 4)) for _ in fam.actuators]
                    for _ in range(n_controllers)]
     finally:
         random.setstate(state)

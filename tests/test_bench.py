@@ -64,6 +64,58 @@ def test_gp_controller_bench(capsys):
     assert "needs --figure lamp" in capsys.readouterr().err
 
 
+HERMAN_KEYS = ("steps_per_s", "steps_per_s_all_threads", "threads", "episodes", "steps",
+               "steps_per_episode", "tree_nodes", "gp_controlled", "gp_controller_task",
+               "contact_frames", "diverged", "links", "dofs", "contacts")
+
+
+def _need_herman():
+    from gpmotion.figures import figure_names
+    if "herman" not in figure_names():
+        pytest.skip("the herman figure is not registered")
+
+
+def test_herman_bench_runs_the_gp_arm(capsys):
+    """``gpmotion bench --figure herman``: GP trees on the right arm by default (no timing asserts)."""
+    _need_herman()
+    assert bench.main(["--figure", "herman", "--quick", "--json", "--no-gp", "--no-warm-start",
+                       "--episodes", "2", "--seconds", "0.05"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for k in HERMAN_KEYS:
+        assert k in out, k
+    assert out["figure"] == "herman" and out["controller"] == "gp" and out["dimensions"] == 3
+    assert out["gp_controller_task"] == "herman_touch_nose"
+    assert out["steps_per_s"] > 0 and out["steps_per_s_all_threads"] > 0
+    assert out["steps_per_episode"] == 50 and out["diverged"] == 0
+    assert len(out["tree_nodes"]) == len(out["gp_controlled"]) > 0
+    assert all(20 <= n <= 30 for n in out["tree_nodes"])
+    assert all("_r" in a for a in out["gp_controlled"])          # the right arm only
+    assert "herman_touch_nose" in bench.format_report(out)
+    # the same trees every time; sines remain available for herman
+    assert bench.bench_gp_trees(figure="herman")[2] == bench.bench_gp_trees(figure="herman")[2]
+    r = bench.run_bench("herman", quick=True, episodes=2, seconds=0.05, repeats=1, gp=False,
+                        warm_start=False, controller="sine")
+    assert r["controller"] == "sine" and r["tree_nodes"] is None and r["steps_per_s"] > 0
+
+
+def test_compare_mujoco_humanoid_smoke():
+    """benchmarks/compare_mujoco.py's humanoid workload and 3-D cross-check run (no timing asserts)."""
+    pytest.importorskip("mujoco")
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare_mujoco.py"
+    spec = importlib.util.spec_from_file_location("compare_mujoco_under_test3d", path)
+    cm = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(cm)
+    h = cm.compare_humanoid(episodes=2, seconds=0.05, repeats=1, threads=1)
+    w = h["workload"]
+    assert w["mujoco_nq"] == w["dofs"] and w["mujoco_nu"] == w["actuators"]
+    assert h["ours_steps_per_s"] > 0 and h["mujoco_steps_per_s"] > 0 and h["ratio_one_thread"] > 0
+    assert h["ours_diverged"] == 0
+    c = cm.pendulum3d_crosscheck(seconds=0.5)
+    assert c["max_angle_diff_Euler"] < 1e-9 and c["swing_amplitude"] > 0.1
+
+
 def test_compare_mujoco_gp_smoke():
     """benchmarks/compare_mujoco.py's GP workload runs (tiny; no timing assertions)."""
     pytest.importorskip("mujoco")

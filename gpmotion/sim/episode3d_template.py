@@ -12,15 +12,16 @@ import numpy as np
 from numba import njit, prange
 
 from gpmotion.cache import import_file
-from gpmotion.sim.spatial3d import (aba, centre_of_mass, compute_senses3d, ground_contacts,
-                                    integrate, joint_torques, kinematics, pole_contacts)
+from gpmotion.sim.spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass,
+                                    compute_senses3d, ground_contacts, integrate, joint_torques,
+                                    kinematics, pole_contacts)
 
 _ctrl = import_file({CONTROL_MODULE!r})
 ctrl_init = _ctrl.init
 ctrl_control = _ctrl.control
 
 
-@njit(cache=True, error_model="numpy", boundscheck=False)
+@njit(cache=True, error_model="numpy", boundscheck=False, fastmath={{"contract"}})
 def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
                 ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                 out_pole, out_impact, out_energy, out_targets, out_senses, status):
@@ -30,6 +31,9 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
     n_poles = S.poles.shape[0]
+    gravity = S.gravity
+    neutral = M.neutral
+    act_dof = M.act_dof
     q = q0.copy()
     qd = qd0.copy()
     R = np.zeros((nl, 3, 3))
@@ -38,14 +42,18 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
     r = np.zeros((nl, 3))
     v = np.zeros((nl, 6))
     cbias = np.zeros((nl, 6))
-    IA = np.zeros((nl, 6, 6))
+    Ib = np.zeros((nl, N_IB))
+    body_inertias(M, Ib)           # constant: once per episode
+    IA = np.zeros((nl, N_IA))
     pA = np.zeros((nl, 6))
     U = np.zeros((nl, 6))
+    Ut = np.zeros((nl, 6))
     dinv = np.zeros(nl)
     uu = np.zeros(nl)
     acc = np.zeros((nl, 6))
-    work = np.zeros((3, 6, 6))
-    vec = np.zeros((3, 6))
+    L6 = np.zeros((6, 6))
+    b6 = np.zeros(6)
+    x6 = np.zeros(6)
     qdd = np.zeros(nv)
     tau = np.zeros(nv)
     fext = np.zeros((nl, 6))
@@ -88,7 +96,7 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
         max_pole = max(max_pole, pen)
         compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_norm)
         for a in range(na):
-            targets[a] = M.neutral[a]
+            targets[a] = neutral[a]
             taus[a] = default_tau
         ctrl_control(ci, cf, senses, senses_norm, t, cstate, targets, taus)
         if countdown == 0:
@@ -112,10 +120,10 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
         if step == n_steps:
             break
         joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
-        aba(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, S.gravity, IA, pA, U, dinv, uu,
-            acc, qdd, work, vec)
+        aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, IA, pA, U, Ut,
+                   dinv, uu, acc, qdd, L6, b6, x6)
         for a in range(na):
-            d = M.act_dof[a]
+            d = act_dof[a]
             energy += abs(tau[d] * qd[d]) * dt
         if not integrate(M, q, qd, qdd, dt, limit):
             status[0] = 1
