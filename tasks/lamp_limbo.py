@@ -2,7 +2,7 @@
 
 As lamp_hop, with a pole halfway between start and target and a large
 penalty for touching it.  Pole height (of its lowest point) is a parameter;
-``gpmotion run lamp_limbo --param pole_height=0.30,0.35,0.40`` runs a series.
+``gpmotion run lamp_limbo --param pole_height=0.36,0.40,0.44`` runs a series.
 """
 import numpy as np
 
@@ -18,7 +18,7 @@ class LampLimbo(Task):
     name = "lamp_limbo"
     figure = "lamp"
     description = "the lamp hops to a target, passing under a limbo pole"
-    params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.36}
+    params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42}   # standing, the lamp is 0.50 m tall
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )
