@@ -11,7 +11,7 @@ from pathlib import Path
 
 EPILOG = """examples:
   gpmotion run lamp_hop                         evolve a hopping lamp (GP, defaults)
-  gpmotion run lamp_limbo --param pole_height=0.30,0.36
+  gpmotion run lamp_limbo --param pole_height=0.38,0.42,0.46
   gpmotion run starman_travel --controller bsr-time
   gpmotion replay runs/lamp_hop-gp-seed0        why the best controller scored as it did
   gpmotion render --figure lamp --seconds 2     a filmstrip of the lamp settling
