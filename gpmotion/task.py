@@ -66,6 +66,7 @@ class Task:
     record_every: ClassVar[int] = 10
     dt: ClassVar[float] = 1e-3
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
+    gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
 
     def __init__(self, **overrides):
         unknown = set(overrides) - set(self.params)

@@ -47,7 +47,8 @@ class GPAdapter(_Adapter):
     def __init__(self, family, seed: int, **opts):
         from .gp import GPSearch
         self.family = family
-        self.search = GPSearch(family, seed=seed, **{**GP_DEFAULTS, **opts})
+        self.search = GPSearch(family, seed=seed,
+                               **{**GP_DEFAULTS, **family.task.gp_defaults, **opts})
 
     @property
     def progress(self):
