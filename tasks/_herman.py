@@ -1,0 +1,147 @@
+"""Shared pieces of the Herman upper-body tasks (Gritz & Hahn's humanoid).
+
+The GP drives the right arm only (shoulder y/z/x, elbow, wrist y/x); every
+other joint holds Herman's neutral pose with its PD servo, so the style
+terms watch what the arm's motion does to the rest of the body:
+
+* ``energy``    actuator work over the episode (J)
+* ``posture``   mean RMS deviation of the PD-held joints from neutral (rad):
+                torso sway, the other arm swinging, the head nodding
+* ``through``   the hand or fingertip inside the torso's cylinder (no self-
+                collision in the kernel, so a penalty stands in for it):
+                fraction of frames inside + deepest penetration / radius
+* ``rest``      mean fingertip speed over the last 0.3 s (m/s)
+
+This module starts with ``_``: the plugin loader does not import it as a task.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gpmotion.task import Term
+
+FIGURE = "herman"
+ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "wrist_r_x")
+TERMINALS = tuple(f"angle_{a}" for a in ARM) + tuple(f"rate_{a}" for a in ARM) + ("t",)
+REST_WINDOW = 0.3          # s: "finishing at rest" looks at the fingertip over this tail
+
+
+# Cost scale: the GP's default roulette selects on 1/(1 + cost), so a cost
+# that only spans 0..1.5 barely separates good from bad controllers.  The
+# touch tasks weight their main distance by MAIN_WEIGHT (a cost of 1 per
+# 10 cm); the style weights below are on the same scale.
+MAIN_WEIGHT = 10.0
+
+
+def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ...]:
+    """The style points every Herman arm task shares, phased in after the main goal.
+
+    Weights are for a main term worth ``scale`` per unit; at scale 10 (1 per
+    10 cm): a hand inside the torso for the whole episode costs 15-30 cm of
+    miss, 1° RMS of sway of the held joints 1.7 mm, 100 J of actuator work 2 cm
+    (a plain PD step to the nose spends ~110 J), a fingertip still moving at
+    10 cm/s at the end 1 cm."""
+    terms = [
+        Term("through", 0.15 * scale, phase=(0.1, 0.4),
+             doc="hand/fingertip inside the torso: fraction of frames + depth/radius"),
+        Term("posture", 0.1 * scale, phase=(0.3, 0.7),
+             doc="mean RMS deviation of the PD-held joints from neutral (rad)"),
+        Term("energy", 0.0002 * scale, phase=(0.5, 0.9), doc="actuator work over the episode (J)"),
+    ]
+    if rest:
+        terms.append(Term("rest", 0.1 * scale, phase=(0.2, 0.6),
+                          doc=f"mean fingertip speed over the last {REST_WINDOW} s (m/s)"))
+    return tuple(terms)
+
+
+def _segment(fig, body):
+    """(index into segments(), radius) of a body's capsule."""
+    i = fig.body_names.index(body)
+    m = fig.model
+    return i, float(m.seg_r[i])
+
+
+def point_axis_distance(p, a, b):
+    """Distance [...] from points p [..., 3] to the line a-b [..., 3] and the
+    position t [...] of the foot of the perpendicular (0 at a, 1 at b)."""
+    ab = b - a
+    t = np.einsum("...k,...k->...", p - a, ab) / np.maximum(np.einsum("...k,...k->...", ab, ab), 1e-12)
+    return np.linalg.norm(p - (a + t[..., None] * ab), axis=-1), t
+
+
+def through_torso(traj, points=("hand_r", "fingertip_r")):
+    """Per episode: fraction of frames with a point inside the torso capsule plus
+    the deepest penetration as a fraction of the radius (0 when never inside)."""
+    fig = traj.figure
+    i, r = _segment(fig, "torso")
+    seg = traj.segments()[:, :, i]                          # [E, F, 2, 3]
+    a, b = seg[..., 0, :], seg[..., 1, :]
+    sites = traj.sites()
+    worst = np.zeros(traj.q.shape[:2])
+    for name in points:
+        p = sites[..., fig.site_names.index(name), :]
+        d, t = point_axis_distance(p, a, b)
+        # the trunk's cylinder only: the capsule's end caps would reach the chin
+        inside = np.where((t > 0.0) & (t < 1.0), np.clip((r - d) / r, 0.0, 1.0), 0.0)
+        worst = np.maximum(worst, inside)
+    return (worst > 0).mean(axis=1) + worst.max(axis=1)
+
+
+def posture(traj, controlled=ARM):
+    """Mean over frames of the RMS deviation of the PD-held joints from neutral (rad)."""
+    fig = traj.figure
+    m = fig.model
+    held = [a for a, n in enumerate(fig.actuator_names) if n not in controlled]
+    dev = traj.q[..., m.act_q[held]] - m.neutral[held]
+    return np.sqrt((dev ** 2).mean(axis=-1)).mean(axis=1)
+
+
+def site_speed(traj, name):
+    """Speed [E, F] of a site by central differences over the recorded frames (m/s)."""
+    p = traj.site(name)
+    return np.linalg.norm(np.gradient(p, traj.times, axis=1), axis=-1)
+
+
+def tail(traj, seconds):
+    """Boolean mask [F] of the frames in the last ``seconds`` of the episode."""
+    return traj.times >= traj.times[-1] - seconds - 1e-9
+
+
+def style_measures(traj, rest: bool = True) -> dict[str, np.ndarray]:
+    out = {"through": through_torso(traj), "posture": posture(traj),
+           "energy": traj.energy.sum(axis=1)}
+    if rest:
+        out["rest"] = site_speed(traj, "fingertip_r")[:, tail(traj, REST_WINDOW)].mean(axis=1)
+    return out
+
+
+# ---- posing Herman by hand (tests, examples): numpy forward kinematics -------
+def pose_q(fig, **angles) -> np.ndarray:
+    """Herman's default configuration with some actuated joints set (radians)."""
+    q = fig.q_default.copy()
+    for name, v in angles.items():
+        q[fig.model.act_q[fig.actuator_names.index(name)]] = v
+    return q
+
+
+def reach(fig, site, target, joints=ARM, x0=None):
+    """Joint angles of ``joints`` (within their limits) that bring ``site`` closest
+    to the world point ``target``: least squares on the numpy forward kinematics."""
+    from scipy.optimize import least_squares
+
+    from gpmotion.sim import geometry3d
+
+    m = fig.model
+    idx = [fig.actuator_names.index(n) for n in joints]
+    lo, hi = m.lo[m.act_dof[idx]], m.hi[m.act_dof[idx]]
+    k = fig.site_names.index(site)
+    target = np.asarray(target, dtype=np.float64)
+
+    def residual(x):
+        q = fig.q_default.copy()
+        q[m.act_q[idx]] = x
+        return geometry3d.sites_world(fig, q)[k] - target
+
+    start = np.clip(m.neutral[idx] if x0 is None else np.asarray(x0, float), lo, hi)
+    sol = least_squares(residual, start, bounds=(lo, hi))
+    return dict(zip(joints, sol.x)), float(np.linalg.norm(sol.fun))

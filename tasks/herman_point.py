@@ -1,0 +1,71 @@
+"""herman_point: Herman points his right arm in a direction and holds it
+(Gritz & Hahn's humanoid learned "pointing").
+
+Main goal: the angle between the shoulder→fingertip line and the target
+direction, averaged over the last third of the episode.  The direction is
+given as azimuth (degrees, 0 = straight ahead, positive to Herman's left)
+and elevation (degrees above the horizontal); the default points ahead and
+to the right at shoulder height.  Style points as every Herman arm task.
+"""
+import numpy as np
+
+from gpmotion.task import Task, Term, register_task
+from gpmotion.tasks._herman import ARM, FIGURE, TERMINALS, style_measures, style_terms
+
+WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
+
+AIMED = np.radians(8.0)     # "pointing at it"
+
+
+def direction(azimuth_deg, elevation_deg):
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+
+
+def pointing_error(traj, target_dir):
+    """Angle [E, F] (rad) between shoulder→fingertip and the target direction."""
+    v = traj.site("fingertip_r") - traj.site("shoulder_r")
+    v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-9)
+    return np.arccos(np.clip(v @ target_dir, -1.0, 1.0))
+
+
+@register_task
+class HermanPoint(Task):
+    name = "herman_point"
+    figure = FIGURE
+    description = "Herman points the right arm in a direction and holds it"
+    params = {"azimuth": -45.0, "elevation": 0.0, "seconds": 1.5}
+    controlled = ARM
+    terminals = TERMINALS
+    terms = (Term("aim", WEIGHT, main=True,
+                  doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
+             *style_terms(scale=WEIGHT))
+    success_threshold = f"mean pointing error over the last third below {np.degrees(AIMED):.0f}°"
+
+    def validate(self):
+        if not -180.0 <= self.p["azimuth"] <= 180.0:
+            raise ValueError(f"herman_point: azimuth must be within -180..180 degrees, got {self.p['azimuth']}")
+        if not -90.0 <= self.p["elevation"] <= 90.0:
+            raise ValueError(f"herman_point: elevation must be within -90..90 degrees, got {self.p['elevation']}")
+
+    @property
+    def target_dir(self):
+        return direction(self.p["azimuth"], self.p["elevation"])
+
+    def measure(self, traj):
+        err = pointing_error(traj, self.target_dir)
+        last = traj.times >= traj.times[-1] * 2.0 / 3.0
+        out = {"aim": err[:, last].mean(axis=1)}
+        out.update(style_measures(traj))
+        return out
+
+    def success(self, traj, m):
+        return m["aim"] < AIMED
+
+    def describe(self, traj, m):
+        v = traj.site("fingertip_r")[0, -1] - traj.site("shoulder_r")[0, -1]
+        az = np.degrees(np.arctan2(v[1], v[0]))
+        el = np.degrees(np.arctan2(v[2], np.hypot(v[0], v[1])))
+        return [f"pointing error {np.degrees(m['aim'][0]):.1f}° over the last third "
+                f"(target az {self.p['azimuth']:.0f}°, el {self.p['elevation']:.0f}°)",
+                f"arm at the end: az {az:.0f}°, el {el:.0f}°, reach {np.linalg.norm(v):.2f} m"]

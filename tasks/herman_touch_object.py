@@ -1,0 +1,76 @@
+"""herman_touch_object: Herman reaches out and touches an object with his
+right fingertip (Gritz & Hahn's humanoid: "touching and grasping targets").
+
+The object is a point given in the pelvis frame (x forward, y left, z up,
+origin at the pelvis, 0.96 m above the ground): ``x, y, z`` (default: in
+front of the chest), or ``target`` = 0, 1 or 2 to pick one of three preset
+positions (chest front, low right beside the hip, high across to the left);
+``target = -1`` (default) uses ``x, y, z``.  Main goal: fingertip–object
+distance at the end.  Style points as every Herman arm task.
+"""
+import numpy as np
+
+from gpmotion.sim import geometry3d
+from gpmotion.task import Task, Term, register_task
+from gpmotion.tasks._herman import ARM, FIGURE, MAIN_WEIGHT, TERMINALS, style_measures, style_terms
+
+TOUCH = 0.04           # m
+REACH = 0.70           # m: farthest object from the right shoulder (arm 0.77 m)
+PRESETS = (            # pelvis frame (m)
+    (0.40, -0.10, 0.30),   # 0: in front of the chest, a little to the right
+    (0.30, -0.35, 0.05),   # 1: low, forward and right of the hip
+    (0.35, 0.10, 0.65),    # 2: high, in front of the face and across to the left
+)
+
+
+@register_task
+class HermanTouchObject(Task):
+    name = "herman_touch_object"
+    figure = FIGURE
+    description = "Herman touches an object with the right fingertip"
+    params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
+              "seconds": 1.5}
+    controlled = ARM
+    terminals = TERMINALS
+    terms = (Term("object", MAIN_WEIGHT, main=True, doc="fingertip–object distance at the end (m)"),
+             *style_terms())
+    success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"
+
+    def validate(self):
+        t = self.p["target"]
+        if t not in (-1.0, 0.0, 1.0, 2.0):
+            raise ValueError(f"herman_touch_object: target must be -1 (use x, y, z) or a preset "
+                             f"0, 1, 2, got {t}")
+
+    def object_position(self) -> np.ndarray:
+        """World position of the object."""
+        t = int(self.p["target"])
+        rel = np.array(PRESETS[t] if t >= 0 else (self.p["x"], self.p["y"], self.p["z"]), float)
+        return self.fig.model.fixed_pos + self.fig.model.fixed_rot @ rel
+
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        f = self.fig
+        shoulder = geometry3d.sites_world(f, f.q_default)[f.site_names.index("shoulder_r")]
+        d = float(np.linalg.norm(self.object_position() - shoulder))
+        if d > REACH:
+            raise ValueError(f"herman_touch_object: the object is {d:.2f} m from the right "
+                             f"shoulder; Herman reaches {REACH} m")
+
+    def measure(self, traj):
+        d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
+        out = {"object": d[:, -1]}
+        out.update(style_measures(traj))
+        return out
+
+    def success(self, traj, m):
+        return m["object"] < TOUCH
+
+    def describe(self, traj, m):
+        d = np.linalg.norm(traj.site("fingertip_r")[0] - self.object_position(), axis=-1)
+        near = d < TOUCH
+        first = f"{traj.times[near.argmax()]:.2f} s" if near.any() else "never"
+        rel = self.object_position() - self.fig.model.fixed_pos
+        return [f"object at ({rel[0]:.2f}, {rel[1]:.2f}, {rel[2]:.2f}) m from the pelvis: "
+                f"fingertip {d[-1] * 100:.1f} cm away at the end; first touch {first}",
+                f"fingertip speed at the end {m['rest'][0] * 100:.1f} cm/s"]

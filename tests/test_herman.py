@@ -1,0 +1,166 @@
+"""Herman, the 3-D humanoid (Gritz & Hahn), and its right-arm tasks."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import gpmotion
+from gpmotion.check import check_task
+from gpmotion.figures import load_spec
+from gpmotion.sim import geometry3d
+from gpmotion.task import get_task
+from gpmotion.tasks._herman import ARM, TERMINALS, pose_q, reach
+from gpmotion.tasks.herman_touch_object import PRESETS
+from gpmotion.tasks.herman_wave import count_passes
+
+HERMAN_TASKS = ("herman_point", "herman_touch_nose", "herman_touch_object", "herman_wave")
+SITES = ("nose", "head_top", "chest", "shoulder_r", "shoulder_l", "hand_r", "hand_l",
+         "fingertip_r", "fingertip_l", "foot_r", "foot_l")
+
+
+@pytest.fixture(scope="module")
+def herman():
+    return gpmotion.load_figure("herman")
+
+
+def _site(fig, q, name):
+    return geometry3d.sites_world(fig, q)[..., fig.site_names.index(name), :]
+
+
+def _still(fig, q, seconds=1.0):
+    """A Trajectory that holds configuration q (built from a real rollout's shape)."""
+    tr = gpmotion.simulate(fig, seconds)
+    return replace(tr, q=np.broadcast_to(q, tr.q.shape).copy(), qd=np.zeros_like(tr.qd),
+                   energy=np.zeros_like(tr.energy))
+
+
+# ---------------------------------------------------------------- the figure
+def test_herman_compiles_with_winters_masses_and_its_sites(herman):
+    spec = load_spec(gpmotion.figures._REGISTRY["herman"])
+    masses = {b["name"]: b["mass"] for b in spec["bodies"]}
+    assert sum(masses.values()) == pytest.approx(70.0, abs=1e-6)            # M = 70 kg
+    # Winter's fractions (pelvis 0.142, head 0.081, thigh 0.100, hand 0.006)
+    assert masses["pelvis"] == pytest.approx(0.142 * 70) and masses["head"] == pytest.approx(0.081 * 70)
+    assert masses["thigh_r"] == pytest.approx(0.100 * 70) and masses["hand_l"] == pytest.approx(0.006 * 70)
+    assert herman.root == "fixed" and herman.total_mass == pytest.approx(70.0 - masses["pelvis"])
+    assert herman.nq == 29 and len(herman.actuator_names) == 29
+    assert set(ARM) <= set(herman.actuator_names)
+    assert set(SITES) <= set(herman.site_names)
+    for name in TERMINALS:
+        herman.sense_index(name)
+    q = herman.q_default
+    assert _site(herman, q, "head_top")[2] == pytest.approx(1.75, abs=1e-6)   # H = 1.75 m
+    assert _site(herman, q, "shoulder_r")[2] == pytest.approx(0.818 * 1.75, abs=1e-3)
+    assert _site(herman, q, "nose")[0] > 0.05                                 # faces +x
+    assert _site(herman, q, "shoulder_l")[1] > 0 > _site(herman, q, "shoulder_r")[1]  # y left
+    for foot in ("foot_r", "foot_l"):                                         # just above the floor
+        assert 0.0 < _site(herman, q, foot)[2] < 0.01
+
+
+def test_herman_holds_its_neutral_pose_without_jitter(herman):
+    tr = gpmotion.simulate(herman, 2.0, record_every=1)
+    assert not tr.diverged[0]
+    m = herman.model
+    assert np.abs(tr.qd[0, -1]).max() < 1e-3
+    assert np.abs(tr.q[0, -1, m.act_q] - m.neutral).max() < 0.02          # sags < 1.2°
+    last = tr.qd[0, -500:]
+    assert np.abs(np.diff(last, axis=0)).max() / 1e-3 < 0.05              # no step-to-step rattle
+    assert tr.contact_force.max() == 0.0                                   # feet clear of the floor
+
+
+def test_herman_arm_servos_are_stable_over_random_poses(herman):
+    """The shoulder's light 'spin' mode is where an explicit PD jitters first."""
+    from gpmotion.controllers import schedule
+    m, names = herman.model, herman.actuator_names
+    rng = np.random.default_rng(1)
+    idx = [names.index(n) for n in ARM]
+    lo, hi = m.lo[m.act_dof[idx]], m.hi[m.act_dof[idx]]
+    T = np.tile(m.neutral, (40, 1))
+    T[:, idx] = rng.uniform(lo, hi, (40, len(idx)))
+    tr = gpmotion.rollout(herman, gpmotion.make_scene(), schedule.sines(T, 0.0, 1.0, 0.0),
+                          n_steps=2000, record_every=10)
+    assert not tr.diverged.any()
+    assert np.abs(tr.qd[:, -1]).max() < 0.05
+
+
+# ---------------------------------------------------------------- the tasks
+@pytest.mark.parametrize("name", HERMAN_TASKS)
+def test_herman_task_passes_check_task(name):
+    check_task(name)
+
+
+@pytest.mark.parametrize("name", HERMAN_TASKS)
+def test_herman_tasks_drive_only_the_right_arm(name):
+    t = get_task(name)
+    assert t.figure == "herman" and tuple(t.controlled) == ARM
+    assert t.success_threshold and 1.0 <= t.seconds <= 3.0
+
+
+def test_touch_nose_main_term_is_zero_at_the_nose_and_large_at_neutral(herman):
+    task = get_task("herman_touch_nose")
+    nose = _site(herman, herman.q_default, "nose")
+    angles, miss = reach(herman, "fingertip_r", nose, x0=[-1.0, 0.5, 0.0, 2.3, 0.0, 0.0])
+    assert miss < 1e-4
+    touching = _still(herman, pose_q(herman, **angles))
+    neutral = _still(herman, herman.q_default)
+    m_touch, m_neutral = task.measure(touching), task.measure(neutral)
+    assert m_touch["nose"][0] < 1e-3 and m_touch["nose_end"][0] < 1e-3
+    assert m_neutral["nose"][0] > 1.0                  # ~0.95 m away, + half of it again
+    assert task.success(touching, m_touch)[0] and not task.success(neutral, m_neutral)[0]
+    assert m_touch["through"][0] == 0.0 and m_touch["rest"][0] < 1e-9
+
+
+def test_the_hand_inside_the_torso_is_penalized(herman):
+    task = get_task("herman_touch_nose")
+    inside = _site(herman, herman.q_default, "chest") - [0.10, 0.0, 0.0]    # 2 cm off the axis
+    angles, miss = reach(herman, "hand_r", inside, x0=[-0.5, 0.5, 0.5, 2.0, 0.0, 0.0])
+    assert miss < 0.01
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["through"][0] > 1.0                      # every frame, and deep
+    assert task.measure(_still(herman, herman.q_default))["through"][0] == 0.0
+
+
+def test_point_main_term_follows_the_arm_direction(herman):
+    task = get_task("herman_point", azimuth=-45.0, elevation=0.0)
+    shoulder = _site(herman, herman.q_default, "shoulder_r")
+    aim = shoulder + 0.7 * task.target_dir
+    angles, miss = reach(herman, "fingertip_r", aim, x0=[-1.2, 0.0, -0.5, 0.1, 0.0, 0.0])
+    assert miss < 0.01
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["aim"][0] < np.radians(1.0) and task.success(None, m)[0]
+    hanging = task.measure(_still(herman, herman.q_default))["aim"][0]
+    assert np.radians(80) < hanging < np.radians(100)   # the arm hangs: ~90° off a horizontal aim
+
+
+@pytest.mark.parametrize("target", [0, 1, 2])
+def test_touch_object_presets_are_reachable(herman, target):
+    task = get_task("herman_touch_object", target=target)
+    obj = task.object_position()
+    assert obj == pytest.approx(np.array(PRESETS[target]) + [0.0, 0.0, 0.96])
+    angles, miss = reach(herman, "fingertip_r", obj, x0=[-0.8, 0.3, 0.0, 1.5, 0.0, 0.0])
+    assert miss < 0.005
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["object"][0] < 0.005 and task.success(None, m)[0]
+
+
+def test_touch_object_rejects_bad_targets():
+    with pytest.raises(ValueError, match="target"):
+        get_task("herman_touch_object", target=5)
+    with pytest.raises(ValueError, match="reaches"):
+        get_task("herman_touch_object", x=1.5)
+
+
+def test_wave_counts_lateral_swings_only_while_raised():
+    t = np.linspace(0.0, 1.5, 151)
+    y = np.stack([0.1 * np.sin(2 * np.pi * 1.5 * t),      # 1.5 Hz, ±10 cm: 5 passes
+                  0.02 * np.sin(2 * np.pi * 3 * t),       # too small to count
+                  0.1 * np.sin(2 * np.pi * 1.5 * t)])
+    ok = np.ones_like(y, dtype=bool)
+    ok[2] = False                                          # swinging, but the hand is down
+    assert count_passes(y, ok).tolist() == [5, 0, 0]
+
+
+def test_wave_cost_is_bounded_and_worst_when_the_arm_hangs(herman):
+    task = get_task("herman_wave")
+    m = task.measure(_still(herman, herman.q_default, seconds=task.seconds))
+    assert 0.9 < m["wave"][0] <= 1.0 and not task.success(None, m)[0]
