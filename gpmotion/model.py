@@ -85,6 +85,8 @@ class Model3D(NamedTuple):
     neutral: np.ndarray     # float64[na]
     cp_link: np.ndarray     # int64[nc]   contact points (-1: fixed root body)
     cp_pos: np.ndarray      # float64[nc, 3]
+    ss_link: np.ndarray     # int64[nss]  sensed sites (``sense = true``; -1: fixed root body)
+    ss_pos: np.ndarray      # float64[nss, 3]  their positions in the link frame
     seg_link: np.ndarray    # int64[ns]
     seg_a: np.ndarray       # float64[ns, 3]
     seg_b: np.ndarray
@@ -115,12 +117,27 @@ class Scene(NamedTuple):
     k_pole: float
     c_pole: float
     goal: np.ndarray        # float64[2] the goal point (x, z) senses refer to
+    goal_y: float = 0.0     # its y: a 3-D figure's goal is (goal[0], goal_y, goal[1])
+
+    @property
+    def goal3(self) -> np.ndarray:
+        """The goal as a 3-D point (x, y, z)."""
+        return np.array([self.goal[0], self.goal_y, self.goal[1]], dtype=np.float64)
 
 
 def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
                poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0)) -> Scene:
-    """A Scene with the defaults every shipped figure is stable with at dt=1 ms."""
+    """A Scene with the defaults every shipped figure is stable with at dt=1 ms.
+
+    ``goal``: (x, z) for planar figures, or (x, y, z) (a 3-D figure's senses
+    refer to it; a planar one sees its (x, z)).
+    """
+    goal = np.asarray(goal, dtype=np.float64).reshape(-1)
+    if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
+        raise ValueError(f"scene: goal must be 2 (x, z) or 3 (x, y, z) finite numbers, got {goal.tolist()}")
+    goal_y = float(goal[1]) if goal.size == 3 else 0.0
+    goal = goal[[0, 2]].copy() if goal.size == 3 else goal.copy()
     poles = np.asarray(poles, dtype=np.float64).reshape(-1, 3)
     for name, v in (("gravity", gravity), ("k_ground", k_ground), ("c_ground", c_ground),
                     ("mu", mu), ("k_tangent", k_tangent), ("c_tangent", c_tangent),
@@ -131,8 +148,7 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
         raise ValueError("scene: poles need finite x, z and a radius > 0")
     return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
                  float(c_ground), float(mu), float(k_tangent), float(c_tangent),
-                 poles, float(k_pole), float(c_pole),
-                 np.asarray(goal, dtype=np.float64).reshape(2))
+                 poles, float(k_pole), float(c_pole), goal, goal_y)
 
 
 @dataclass

@@ -31,6 +31,8 @@ Format (TOML or dict; every vector is [x, y, z], z up, SI units, radians)::
     torque_limit = 150.0; damping = 0.0; actuated = true
 
     [[contacts]] / [[sites]]: name, body, position = [x, y, z]
+    sense = true                           # sites only: add the senses
+                                           # site_<name>_dx/_dy/_dz (position − goal)
     [limits] stiffness, damping            # the joint-limit spring
 
 Rotations: ``rotation = [rx, ry, rz]`` in radians (``rotation_deg`` in
@@ -218,10 +220,17 @@ def _points3d(items, kind, bodies):
     if not isinstance(items, list):
         raise SpecError(f"{kind}s must be a list of tables")
     for i, p in enumerate(items):
+        if not isinstance(p, dict):
+            raise SpecError(f"{kind} #{i}: must be a table")
         where = f"{kind} {p.get('name', i)!r}"
         if not isinstance(p.get("name"), str) or p.get("body") not in bodies:
             raise SpecError(f"{where}: needs a 'name' and a known 'body'")
-        out.append((p["name"], p["body"], _vec(p, "position", where, 3)))
+        sense = p.get("sense", False)
+        if kind != "site" and "sense" in p:
+            raise SpecError(f"{where}: only sites take 'sense'")
+        if not isinstance(sense, bool):
+            raise SpecError(f"{where}: 'sense' must be true or false")
+        out.append((p["name"], p["body"], _vec(p, "position", where, 3), sense))
     names = [p[0] for p in out]
     if len(set(names)) != len(names):
         raise SpecError(f"{kind} names must be unique: {names}")
@@ -343,9 +352,11 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     total_mass = sum(b["mass"] for b in bodies.values() if body_link[b["name"]] >= 0)
     actuator_names = [d["name"] for _, d in act]
     contact_names = [c[0] for c in contacts]
+    sensed = [s for s in sites if s[3]]
     sense_names, sense_lo, sense_hi = sense_layout3d(
         actuator_names, contact_names, np.array([d["lo"] for _, d in act]),
-        np.array([d["hi"] for _, d in act]), total_mass, sense_ranges or {})
+        np.array([d["hi"] for _, d in act]), total_mass, sense_ranges or {},
+        sites=[s[0] for s in sensed])
     limits = spec.get("limits", {})
     model = Model3D(
         parent=np.array([L["parent"] for L in links], dtype=np.int64),
@@ -362,6 +373,8 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         neutral=np.array([d["neutral"] for _, d in act], dtype=np.float64),
         cp_link=np.array([body_link[c[1]] for c in contacts], dtype=np.int64),
         cp_pos=np.array([c[2] for c in contacts], dtype=np.float64).reshape(-1, 3),
+        ss_link=np.array([body_link[s[1]] for s in sensed], dtype=np.int64),
+        ss_pos=np.array([s[2] for s in sensed], dtype=np.float64).reshape(-1, 3),
         seg_link=np.array([body_link[b] for b in seg_bodies], dtype=np.int64),
         seg_a=np.array([bodies[b]["seg"][0] for b in seg_bodies]).reshape(-1, 3),
         seg_b=np.array([bodies[b]["seg"][1] for b in seg_bodies]).reshape(-1, 3),

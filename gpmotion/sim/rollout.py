@@ -178,8 +178,8 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     status = np.zeros((E, 2), dtype=np.int64)
     cstate = np.zeros((E, max(1, controller.cstate_size)))
     kernel = kernel_for(controller.module, 3 if is3d else 2)
-    # a 3-D kernel gets the goal as (x, y, z); the planar scene's goal is (x, z), y = 0
-    extra = (np.array([scene.goal[0], 0.0, scene.goal[1]]),) if is3d else ()
+    # a 3-D kernel gets the goal as (x, y, z): the scene's (x, z) goal and its goal_y
+    extra = (scene.goal3,) if is3d else ()
     old_threads = numba.get_num_threads()
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))

@@ -75,17 +75,19 @@ DEFAULT_RANGES3D = {"px": (-2.0, 2.0), "py": (-2.0, 2.0), "pz": (-1.0, 1.0),
                     "yaw": (-np.pi, np.pi), "wx": (-10.0, 10.0), "wy": (-10.0, 10.0),
                     "wz": (-10.0, 10.0), "up_x": (-1.0, 1.0), "up_y": (-1.0, 1.0),
                     "up_z": (-1.0, 1.0), "com_z": (0.0, 2.0), "com_vz": (-3.0, 3.0),
-                    "t": (0.0, 5.0), "rate": (-10.0, 10.0)}
+                    "t": (0.0, 5.0), "rate": (-10.0, 10.0), "site": (-1.0, 1.0)}
 
 
-def sense_layout3d(actuators, contacts, lo, hi, total_mass, overrides):
+def sense_layout3d(actuators, contacts, lo, hi, total_mass, overrides, sites=()):
     """Names and (lo, hi) ranges of the sense vector of a 3-D figure.
 
     Layout: the body senses ``BODY_SENSES3D`` (base position relative to
     the goal, base world velocity, roll/pitch/yaw, world angular velocity,
     the base's up vector (its z axis in world), com height and vertical
-    velocity, time), then ``angle_<dof>``, ``rate_<dof>`` per actuated dof
-    and ``force_<contact>`` per contact point.
+    velocity, time), then ``angle_<dof>``, ``rate_<dof>`` per actuated dof,
+    ``force_<contact>`` per contact point and, per sensed site (``sense =
+    true`` in the spec), ``site_<name>_dx/_dy/_dz``: its world position minus
+    the scene's 3-D goal (range ``site``, ±1 m).
     """
     r = dict(DEFAULT_RANGES3D)
     r["force"] = (0.0, 2.0 * max(total_mass, 1e-3) * 9.81)
@@ -106,6 +108,9 @@ def sense_layout3d(actuators, contacts, lo, hi, total_mass, overrides):
         add(f"rate_{a}", r.get(f"rate_{a}", r["rate"]))
     for c in contacts:
         add(f"force_{c}", r.get(f"force_{c}", r["force"]))
+    for s_ in sites:
+        for ax in ("dx", "dy", "dz"):
+            add(f"site_{s_}_{ax}", r.get(f"site_{s_}_{ax}", r["site"]))
     return names, np.array(los), np.array(his)
 
 
@@ -980,8 +985,25 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_n
     for a in range(na):
         senses[nb + a] = q[M.act_q[a]]
         senses[nb + na + a] = qd[M.act_dof[a]]
-    for k in range(cforce.shape[0]):
+    nc = cforce.shape[0]
+    for k in range(nc):
         senses[nb + 2 * na + k] = cforce[k]
+    ns0 = nb + 2 * na + nc
+    g0, g1, g2 = goal[0], goal[1], goal[2]
+    for k in range(M.ss_link.shape[0]):     # sensed sites: world position − goal
+        i = M.ss_link[k]
+        s0, s1, s2 = M.ss_pos[k, 0], M.ss_pos[k, 1], M.ss_pos[k, 2]
+        if i < 0:
+            px = fx + f00 * s0 + f01 * s1 + f02 * s2
+            py = fy + f10 * s0 + f11 * s1 + f12 * s2
+            pz = fz + f20 * s0 + f21 * s1 + f22 * s2
+        else:
+            px = pos[i, 0] + R[i, 0, 0] * s0 + R[i, 0, 1] * s1 + R[i, 0, 2] * s2
+            py = pos[i, 1] + R[i, 1, 0] * s0 + R[i, 1, 1] * s1 + R[i, 1, 2] * s2
+            pz = pos[i, 2] + R[i, 2, 0] * s0 + R[i, 2, 1] * s1 + R[i, 2, 2] * s2
+        senses[ns0 + 3 * k] = px - g0
+        senses[ns0 + 3 * k + 1] = py - g1
+        senses[ns0 + 3 * k + 2] = pz - g2
     for k in range(senses.shape[0]):
         lo, hi = M.sense_lo[k], M.sense_hi[k]
         span = hi - lo
