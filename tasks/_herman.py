@@ -22,7 +22,13 @@ from gpmotion.task import Term
 
 FIGURE = "herman"
 ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "wrist_r_x")
-TERMINALS = tuple(f"angle_{a}" for a in ARM) + tuple(f"rate_{a}" for a in ARM) + ("t",)
+# The fingertip relative to the task's goal point (the scene goal, world
+# (x, y, z); each task puts it on its target), so a controller can see how
+# far it still has to go, as in Gritz & Hahn's "effector position relative
+# to the goal" senses.
+FINGERTIP = ("site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz")
+TERMINALS = (tuple(f"angle_{a}" for a in ARM) + tuple(f"rate_{a}" for a in ARM) + ("t",)
+             + FINGERTIP)
 REST_WINDOW = 0.3          # s: "finishing at rest" looks at the fingertip over this tail
 
 
@@ -31,6 +37,22 @@ REST_WINDOW = 0.3          # s: "finishing at rest" looks at the fingertip over 
 # touch tasks weight their main distance by MAIN_WEIGHT (a cost of 1 per
 # 10 cm); the style weights below are on the same scale.
 MAIN_WEIGHT = 10.0
+
+# A herman arm run: ~50 rollouts of 1.5 s per second on two cores; 150 × 30
+# keeps one run to a few minutes (the GP's 300 × 40 takes ~4).
+GP_DEFAULTS = {"population": 150, "generations": 30}
+
+
+def goal_scene(point):
+    """The default scene with the goal (senses' reference) at a world point (x, y, z)."""
+    from gpmotion.model import make_scene
+    return make_scene(goal=tuple(float(v) for v in point))
+
+
+def site_at_rest(fig, name) -> np.ndarray:
+    """World position of a site in Herman's default (neutral) pose."""
+    from gpmotion.sim import geometry3d
+    return geometry3d.sites_world(fig, fig.q_default)[fig.site_names.index(name)]
 
 
 def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ...]:

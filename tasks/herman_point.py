@@ -10,11 +10,13 @@ to the right at shoulder height.  Style points as every Herman arm task.
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import ARM, FIGURE, TERMINALS, style_measures, style_terms
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, TERMINALS, goal_scene, site_at_rest,
+                                    style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
 
 AIMED = np.radians(8.0)     # "pointing at it"
+GOAL_REACH = 0.6            # m: the senses' goal lies this far along the direction from the shoulder
 
 
 def direction(azimuth_deg, elevation_deg):
@@ -37,6 +39,7 @@ class HermanPoint(Task):
     params = {"azimuth": -45.0, "elevation": 0.0, "seconds": 1.5}
     controlled = ARM
     terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              *style_terms(scale=WEIGHT))
@@ -51,6 +54,10 @@ class HermanPoint(Task):
     @property
     def target_dir(self):
         return direction(self.p["azimuth"], self.p["elevation"])
+
+    def scene(self):
+        # senses: fingertip − a point GOAL_REACH along the direction from the shoulder
+        return goal_scene(site_at_rest(self.fig, "shoulder_r") + GOAL_REACH * self.target_dir)
 
     def measure(self, traj):
         err = pointing_error(traj, self.target_dir)

@@ -10,8 +10,8 @@ of the torso, disturb the held joints little, spend little work, end at rest.
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, MAIN_WEIGHT, TERMINALS, style_measures,
-                                    style_terms, tail)
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+                                    site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
 HOLD = 0.5              # s: the window of the averaged distance
@@ -30,10 +30,16 @@ class HermanTouchNose(Task):
     params = {"seconds": 1.5}
     controlled = ARM
     terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
     terms = (Term("nose", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–nose distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the nose at the end"
+
+    def scene(self):
+        # the senses' goal: the nose at the neutral pose (the head is PD-held,
+        # so it moves only a little)
+        return goal_scene(site_at_rest(self.fig, "nose"))
 
     def measure(self, traj):
         d = fingertip_distance(traj, "nose")

@@ -12,7 +12,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import ARM, FIGURE, MAIN_WEIGHT, TERMINALS, style_measures, style_terms
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+                                    style_measures, style_terms)
 
 TOUCH = 0.04           # m
 REACH = 0.70           # m: farthest object from the right shoulder (arm 0.77 m)
@@ -32,6 +33,7 @@ class HermanTouchObject(Task):
               "seconds": 1.5}
     controlled = ARM
     terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
     terms = (Term("object", MAIN_WEIGHT, main=True, doc="fingertip–object distance at the end (m)"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"
@@ -56,6 +58,9 @@ class HermanTouchObject(Task):
         if d > REACH:
             raise ValueError(f"herman_touch_object: the object is {d:.2f} m from the right "
                              f"shoulder; Herman reaches {REACH} m")
+
+    def scene(self):
+        return goal_scene(self.object_position())     # senses: fingertip − object
 
     def measure(self, traj):
         d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)

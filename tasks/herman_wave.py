@@ -17,12 +17,14 @@ Style points as every Herman arm task except "ends at rest" (it is waving).
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import ARM, FIGURE, MAIN_WEIGHT, TERMINALS, style_measures, style_terms
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+                                    site_at_rest, style_measures, style_terms)
 
 ABOVE = 0.05          # m above the shoulder counts as "raised"
 PASS = 0.05           # m: the smallest lateral movement that counts as a swing
 GOAL_PASSES = 4
 SPREAD = 0.2          # m
+WAVE_AT = (0.05, -0.10, 0.45)   # m from the right shoulder: the senses' goal, a raised hand
 
 
 def count_passes(y, ok, step=PASS):
@@ -74,11 +76,16 @@ class HermanWave(Task):
     params = {"seconds": 2.4}
     controlled = ARM
     terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
     terms = (Term("wave", MAIN_WEIGHT, main=True,
                   doc="mean of: hand below the shoulder, too few passes, too small a swing (0..1)"),
              *style_terms(rest=False))
     success_threshold = (f"hand {ABOVE * 100:.0f} cm above the shoulder for >= 80% of the second "
                          f"half and >= 2 lateral swings of >= {PASS * 100:.0f} cm")
+
+    def scene(self):
+        # senses: fingertip − a point above and a little outside the right shoulder
+        return goal_scene(site_at_rest(self.fig, "shoulder_r") + np.array(WAVE_AT))
 
     def measure(self, traj):
         p = wave_parts(traj)

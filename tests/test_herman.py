@@ -164,3 +164,30 @@ def test_wave_cost_is_bounded_and_worst_when_the_arm_hangs(herman):
     task = get_task("herman_wave")
     m = task.measure(_still(herman, herman.q_default, seconds=task.seconds))
     assert 0.9 < m["wave"][0] <= 1.0 and not task.success(None, m)[0]
+
+
+@pytest.mark.parametrize("name", HERMAN_TASKS)
+def test_herman_tasks_see_the_fingertip_relative_to_their_goal(name, herman):
+    task = get_task(name)
+    assert {"site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz"} <= set(task.terminal_names())
+    scene = task.scene()
+    tr = gpmotion.rollout(herman, scene, schedule_constant(herman), n_steps=50, record_senses=True)
+    got = np.stack([tr.sense(f"site_fingertip_r_{a}") for a in ("dx", "dy", "dz")], -1)
+    assert np.abs(got - (tr.site("fingertip_r") - scene.goal3)).max() < 1e-9
+
+
+def schedule_constant(fig):
+    from gpmotion.controllers import schedule
+    return schedule.constant(fig.model.neutral)
+
+
+def test_herman_task_goals_are_their_targets(herman):
+    nose = _site(herman, herman.q_default, "nose")
+    assert np.allclose(get_task("herman_touch_nose").scene().goal3, nose)
+    t = get_task("herman_touch_object", target=1)
+    assert np.allclose(t.scene().goal3, t.object_position())
+    p = get_task("herman_point", azimuth=30.0, elevation=10.0)
+    shoulder = _site(herman, herman.q_default, "shoulder_r")
+    d = p.scene().goal3 - shoulder
+    assert np.linalg.norm(d) == pytest.approx(0.6) and np.allclose(d / 0.6, p.target_dir)
+    assert get_task("herman_wave").scene().goal3[2] > shoulder[2] + 0.3

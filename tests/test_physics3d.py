@@ -552,3 +552,50 @@ def test_bad_3d_specs_get_one_clear_line(change, message):
     change(spec)
     with pytest.raises(SpecError, match=message):
         compile_spec(spec)
+
+
+@pytest.mark.parametrize("root", ["free", "fixed"])
+def test_sensed_sites_are_their_world_position_minus_the_3d_goal(root):
+    spec = humanoid3d()
+    spec["root"]["type"] = root
+    spec["sites"] = [dict(name="head_top", body="head", position=[0, 0, 0.2], sense=True),
+                     dict(name="belly", body="pelvis", position=[0.1, 0.02, 0.05], sense=True),
+                     dict(name="hand_l", body="fore_arm_l", position=[0, 0, -0.28])]
+    fig = gpmotion.load_figure(spec)
+    names = [n for n in fig.sense_names if n.startswith("site_")]
+    assert names == [f"site_{s}_{a}" for s in ("head_top", "belly") for a in ("dx", "dy", "dz")]
+    k = fig.sense_index("site_head_top_dx")
+    assert fig.model.sense_lo[k] == -1.0 and fig.model.sense_hi[k] == 1.0
+    goal = np.array([0.3, -0.2, 0.5])
+    scene = gpmotion.make_scene(goal=goal)
+    assert np.array_equal(scene.goal, [0.3, 0.5]) and np.array_equal(scene.goal3, goal)
+    m = fig.model
+    T = np.tile(m.neutral, (2, 1))
+    T[1] += 0.3
+    _, tr = rollout(fig, 0.3, scene, schedule.sines(T, 0.2, 2.0, 0.0), record_senses=True)
+    for s in ("head_top", "belly"):
+        got = np.stack([tr.sense(f"site_{s}_{a}") for a in ("dx", "dy", "dz")], -1)
+        assert np.abs(got - (tr.site(s) - goal)).max() < 1e-9
+    base = g3.base_pose(m, tr.q)[..., :3]
+    assert np.abs(np.stack([tr.sense(n) for n in ("px", "py", "pz")], -1) - (base - goal)).max() < 1e-9
+    if root == "free":
+        assert np.ptp(tr.sense("site_belly_dz")) > 1e-3        # the floating base moves
+
+
+def test_a_planar_goal_is_a_3d_goal_with_y_zero():
+    s = gpmotion.make_scene(goal=(1.0, 0.2))
+    assert np.array_equal(s.goal, [1.0, 0.2]) and s.goal_y == 0.0
+    assert np.array_equal(s.goal3, [1.0, 0.0, 0.2])
+    with pytest.raises(ValueError, match="goal"):
+        gpmotion.make_scene(goal=(1.0, 2.0, 3.0, 4.0))
+
+
+@pytest.mark.parametrize("where, value, message", [
+    ("sites", "yes", "'sense' must be true or false"),
+    ("contacts", True, "only sites take 'sense'"),
+])
+def test_site_sense_flag_is_checked(where, value, message):
+    spec = humanoid3d()
+    spec[where][0]["sense"] = value
+    with pytest.raises(SpecError, match=message):
+        gpmotion.load_figure(spec)
