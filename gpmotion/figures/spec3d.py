@@ -50,11 +50,10 @@ from __future__ import annotations
 
 import math
 
-import networkx as nx
 import numpy as np
 
 from ..model import FREE3D, HINGE3D, SLIDE3D, Figure, Model3D
-from .spec import PLANAR_AXIS, SpecError, _num, _vec
+from .spec import PLANAR_AXIS, SpecError, _num, _tree_order, _vec
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -235,22 +234,6 @@ def _points3d(items, kind, bodies):
     if len(set(names)) != len(names):
         raise SpecError(f"{kind} names must be unique: {names}")
     return out
-
-
-def _tree_order(bodies, joints, root_body):
-    g = nx.DiGraph()
-    g.add_nodes_from(bodies)
-    for j in joints:
-        if g.in_degree(j["child"]) > 0:
-            raise SpecError(f"joint {j['name']!r}: body {j['child']!r} already has a parent")
-        g.add_edge(j["parent"], j["child"], joint=j)
-    if root_body not in g:
-        raise SpecError(f"root: unknown body {root_body!r}")
-    if not nx.is_arborescence(g) or g.in_degree(root_body) != 0:
-        loose = set(g) - {root_body} - set(nx.descendants(g, root_body))
-        raise SpecError("joints must form a tree rooted at the root body"
-                        + (f"; not reached from it: {sorted(loose)}" if loose else "; a cycle exists"))
-    return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
 
 
 def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
