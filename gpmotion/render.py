@@ -49,11 +49,12 @@ def capsules(seg: np.ndarray, radii: np.ndarray) -> np.ndarray:
     return np.concatenate([pts_b, pts_a], axis=1)
 
 
-def _check_motion(segments, radii, times):
-    """Validated arrays and the indices of frames that are entirely finite."""
+def _check_motion(segments, radii, times, dims: int = 2):
+    """Validated arrays and the indices of frames that are entirely finite
+    (``dims`` = 2 for x–z drawings, 3 for the 3-D renderer)."""
     seg = np.asarray(segments, dtype=float)
-    if seg.ndim != 4 or seg.shape[2:] != (2, 2):
-        raise ValueError(f"segments must have shape [frames, n_seg, 2, 2], got {seg.shape}")
+    if seg.ndim != 4 or seg.shape[2:] != (2, dims):
+        raise ValueError(f"segments must have shape [frames, n_seg, 2, {dims}], got {seg.shape}")
     if seg.shape[0] == 0 or seg.shape[1] == 0:
         raise ValueError(f"no frames or no segments to draw (shape {seg.shape})")
     rad = np.asarray(radii, dtype=float).reshape(-1)

@@ -32,6 +32,8 @@ from PIL import Image
 from gpmotion.records import atomic_output
 
 GRID = 0.25          # ground grid spacing (m)
+from .render import _check_motion  # noqa: E402  (one validator for both renderers)
+
 _MAX_GRID_LINES = 40
 
 
@@ -39,21 +41,7 @@ _MAX_GRID_LINES = 40
 
 def _check_motion3d(segments, radii, times):
     """Validated arrays and the indices of frames that are entirely finite."""
-    seg = np.asarray(segments, dtype=float)
-    if seg.ndim != 4 or seg.shape[2:] != (2, 3):
-        raise ValueError(f"segments must have shape [frames, n_seg, 2, 3], got {seg.shape}")
-    if seg.shape[0] == 0 or seg.shape[1] == 0:
-        raise ValueError(f"no frames or no segments to draw (shape {seg.shape})")
-    rad = np.asarray(radii, dtype=float).reshape(-1)
-    if rad.shape != (seg.shape[1],) or not np.all(np.isfinite(rad)) or np.any(rad < 0):
-        raise ValueError(f"radii must be {seg.shape[1]} finite values ≥ 0, got {rad}")
-    t = np.asarray(times, dtype=float).reshape(-1)
-    if t.shape != (seg.shape[0],):
-        raise ValueError(f"times must have {seg.shape[0]} entries, got {t.shape[0]}")
-    ok = np.flatnonzero(np.isfinite(seg).all(axis=(1, 2, 3)) & np.isfinite(t))
-    if ok.size == 0:
-        raise ValueError("every frame contains NaN/inf: nothing to draw")
-    return seg, rad, t, ok
+    return _check_motion(segments, radii, times, dims=3)
 
 
 def _check_scene3d(goal, targets, poles):
