@@ -21,6 +21,7 @@ from gpmotion.run import RunConfig, run
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--task", default="lamp_hop")
     ap.add_argument("--controller", default="gp")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE")
@@ -29,7 +30,7 @@ def main(argv=None):
     params = dict(p.split("=", 1) for p in args.param)
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             out = Path(tmp) / f"seed{seed}"
             t0 = time.perf_counter()
             run(RunConfig(task=args.task, family=args.controller, seed=seed, params=params), out,
