@@ -153,6 +153,26 @@ def _tree_order(spec_bodies, joints, root_body):
     return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
 
 
+def _name_and_bodies(spec: dict, parse_body):
+    """The figure's name, its raw [[bodies]] list and the parsed bodies by name
+    (shared by the planar and the 3-D compilers; ``parse_body(b, i)`` differs)."""
+    name = spec.get("name")
+    if not isinstance(name, str) or not name:
+        raise SpecError("figure: needs a 'name'")
+    raw_bodies = spec.get("bodies")
+    if not isinstance(raw_bodies, list) or not raw_bodies:
+        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
+    bodies = {}
+    for i, b in enumerate(raw_bodies):
+        if not isinstance(b, dict):
+            raise SpecError(f"body #{i}: must be a table")
+        bd = parse_body(b, i)
+        if bd["name"] in bodies:
+            raise SpecError(f"body {bd['name']!r} is defined twice")
+        bodies[bd["name"]] = bd
+    return name, raw_bodies, bodies
+
+
 def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     """Validate a spec dict and compile it into a Figure (arrays parents-first)."""
     from ..sim.senses import sense_layout
@@ -165,20 +185,7 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     if dims == 3:
         from .spec3d import compile_spec3d
         return compile_spec3d(spec, sense_ranges)
-    name = spec.get("name")
-    if not isinstance(name, str) or not name:
-        raise SpecError("figure: needs a 'name'")
-    raw_bodies = spec.get("bodies")
-    if not isinstance(raw_bodies, list) or not raw_bodies:
-        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
-    bodies = {}
-    for i, b in enumerate(raw_bodies):
-        if not isinstance(b, dict):
-            raise SpecError(f"body #{i}: must be a table")
-        bd = _body(b, i)
-        if bd["name"] in bodies:
-            raise SpecError(f"body {bd['name']!r} is defined twice")
-        bodies[bd["name"]] = bd
+    name, raw_bodies, bodies = _name_and_bodies(spec, _body)
     root = spec.get("root", {})
     rtype = root.get("type", "planar")
     if rtype not in ("planar", "fixed"):

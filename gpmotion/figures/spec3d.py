@@ -53,7 +53,7 @@ import math
 import numpy as np
 
 from ..model import FREE3D, HINGE3D, SLIDE3D, Figure, Model3D
-from .spec import PLANAR_AXIS, SpecError, _num, _tree_order, _vec
+from .spec import PLANAR_AXIS, SpecError, _name_and_bodies, _num, _tree_order, _vec
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -241,20 +241,7 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     from ..sim.spatial3d import sense_layout3d
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
-    name = spec.get("name")
-    if not isinstance(name, str) or not name:
-        raise SpecError("figure: needs a 'name'")
-    raw_bodies = spec.get("bodies")
-    if not isinstance(raw_bodies, list) or not raw_bodies:
-        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
-    bodies = {}
-    for i, b in enumerate(raw_bodies):
-        if not isinstance(b, dict):
-            raise SpecError(f"body #{i}: must be a table")
-        bd = _body3d(b, i)
-        if bd["name"] in bodies:
-            raise SpecError(f"body {bd['name']!r} is defined twice")
-        bodies[bd["name"]] = bd
+    name, raw_bodies, bodies = _name_and_bodies(spec, _body3d)
     root = spec.get("root", {})
     if not isinstance(root, dict):
         raise SpecError("root: must be a table")
