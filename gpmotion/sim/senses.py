@@ -18,9 +18,14 @@ DEFAULT_RANGES = {"px": (-2.0, 2.0), "pz": (-1.0, 1.0), "vx": (-3.0, 3.0), "vz":
                   "com_vz": (-3.0, 3.0), "t": (0.0, 5.0), "rate": (-10.0, 10.0)}
 
 
-def sense_layout(actuators, contacts, lo, hi, total_mass, overrides):
-    """Names and (lo, hi) ranges of the sense vector of a figure."""
-    r = dict(DEFAULT_RANGES)
+def sense_layout(actuators, contacts, lo, hi, total_mass, overrides, *,
+                 body=BODY_SENSES, ranges=DEFAULT_RANGES, sites=()):
+    """Names and (lo, hi) ranges of the sense vector of a figure.
+
+    ``body``/``ranges`` are the planar body senses by default; the 3-D
+    kernel passes its own and the sensed sites (``site_<name>_dx/dy/dz``).
+    """
+    r = dict(ranges)
     r["force"] = (0.0, 2.0 * max(total_mass, 1e-3) * 9.81)
     r.update(overrides)
     names, los, his = [], [], []
@@ -30,14 +35,18 @@ def sense_layout(actuators, contacts, lo, hi, total_mass, overrides):
         los.append(float(rng[0]))
         his.append(float(rng[1]))
 
-    for n in BODY_SENSES:
+    for n in body:
         add(n, r[n])
-    for a, l, h in zip(actuators, lo, hi):
-        add(f"angle_{a}", r.get(f"angle_{a}", (l, h)))
+    for a, l_, h in zip(actuators, lo, hi):
+        span = (l_, h) if np.isfinite(l_) and np.isfinite(h) else (-np.pi, np.pi)
+        add(f"angle_{a}", r.get(f"angle_{a}", span))
     for a in actuators:
         add(f"rate_{a}", r.get(f"rate_{a}", r["rate"]))
     for c in contacts:
         add(f"force_{c}", r.get(f"force_{c}", r["force"]))
+    for s_ in sites:
+        for ax in ("dx", "dy", "dz"):
+            add(f"site_{s_}_{ax}", r.get(f"site_{s_}_{ax}", r["site"]))
     return names, np.array(los), np.array(his)
 
 

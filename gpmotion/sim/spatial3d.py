@@ -60,6 +60,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .senses import sense_layout
+
 HINGE, SLIDE, FREE = 0, 1, 2
 
 _JIT = dict(cache=True, error_model="numpy", boundscheck=False)
@@ -89,29 +91,8 @@ def sense_layout3d(actuators, contacts, lo, hi, total_mass, overrides, sites=())
     true`` in the spec), ``site_<name>_dx/_dy/_dz``: its world position minus
     the scene's 3-D goal (range ``site``, ±1 m).
     """
-    r = dict(DEFAULT_RANGES3D)
-    r["force"] = (0.0, 2.0 * max(total_mass, 1e-3) * 9.81)
-    r.update(overrides)
-    names, los, his = [], [], []
-
-    def add(name, rng):
-        names.append(name)
-        los.append(float(rng[0]))
-        his.append(float(rng[1]))
-
-    for n in BODY_SENSES3D:
-        add(n, r[n])
-    for a, l_, h in zip(actuators, lo, hi):
-        lo_, hi_ = (l_, h) if np.isfinite(l_) and np.isfinite(h) else (-np.pi, np.pi)
-        add(f"angle_{a}", r.get(f"angle_{a}", (lo_, hi_)))
-    for a in actuators:
-        add(f"rate_{a}", r.get(f"rate_{a}", r["rate"]))
-    for c in contacts:
-        add(f"force_{c}", r.get(f"force_{c}", r["force"]))
-    for s_ in sites:
-        for ax in ("dx", "dy", "dz"):
-            add(f"site_{s_}_{ax}", r.get(f"site_{s_}_{ax}", r["site"]))
-    return names, np.array(los), np.array(his)
+    return sense_layout(actuators, contacts, lo, hi, total_mass, overrides,
+                        body=BODY_SENSES3D, ranges=DEFAULT_RANGES3D, sites=sites)
 
 
 # ---------------------------------------------------------------- kinematics
