@@ -186,9 +186,11 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
         raise KeyboardInterrupt(f"checkpoint saved after generation {search.generation}; "
                                 f"`gpmotion resume {rd.path}` continues")
     if search.done:
-        write_best(rd, cfg, task, family, actuation, search)
+        from .replay import replay_genome
+        replay = replay_genome(task, family, actuation, search.best)   # once, for both
+        write_best(rd, cfg, task, family, actuation, search, replay)
         if artifacts:
-            write_artifacts(rd, task, family, actuation, search.best)
+            write_artifacts(rd, task, family, search.best, replay[0])
     return search.best, search.best_cost, rd
 
 
@@ -211,10 +213,10 @@ def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cos
             "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
 
 
-def write_best(rd: RunDir, cfg, task, family, actuation, search):
+def write_best(rd: RunDir, cfg, task, family, actuation, search, replay):
+    """best.json from the search's best and its replay (traj, costs, measures, ok)."""
     rec = controller_record(cfg, task, family, actuation, search.best, search.best_cost)
-    from .replay import replay_genome
-    traj, costs, measures, ok = replay_genome(task, family, actuation, search.best)
+    traj, costs, measures, ok = replay
     rec["terms"] = task.breakdown(measures, 0, 1.0)
     rec["final_cost"] = float(costs[0])
     rec["success"] = bool(ok[0])
@@ -222,10 +224,8 @@ def write_best(rd: RunDir, cfg, task, family, actuation, search):
     rd.write_best(rec)
 
 
-def write_artifacts(rd: RunDir, task, family, actuation, genome):
+def write_artifacts(rd: RunDir, task, family, genome, traj):
     from . import render
-    from .replay import replay_genome
-    traj, *_ = replay_genome(task, family, actuation, genome)
     render_trajectory(traj, rd.artifact("filmstrip.png"), rd.artifact("motion.gif"),
                       title=f"{task.name} ({family.name})")
     if family.name == "gp":
