@@ -43,6 +43,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .actuation import limit_torque, servo
+
 REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
 
 _JIT = dict(cache=True, error_model="numpy", boundscheck=False)
@@ -378,26 +380,15 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
     for i in range(q.shape[0]):
         tau[i] = -M.damping[i] * qd[i]
         presc[i] = 0
-        lo, hi = M.lo[i], M.hi[i]
-        # a limit is a unilateral spring-damper: it pushes back, never pulls
-        if q[i] < lo:
-            tau[i] += max(0.0, limit_k * (lo - q[i]) - limit_c * qd[i])
-        elif q[i] > hi:
-            tau[i] += min(0.0, limit_k * (hi - q[i]) - limit_c * qd[i])
+        tau[i] += limit_torque(q[i], qd[i], M.lo[i], M.hi[i], limit_k, limit_c)
     for a in range(M.act_dof.shape[0]):
         i = M.act_dof[a]
-        target, neutral, lo, hi = targets[a], M.neutral[a], M.lo[i], M.hi[i]
-        kp, kd, tau_max = M.kp[a], M.kd[a], M.tau_max[a]
-        if not np.isfinite(target):  # a controller's NaN must not poison the physics
-            target = neutral
-        target = min(hi, max(lo, target))
-        if actuation == 0:
-            u = kp * (target - q[i]) - kd * qd[i]
-            tau[i] += min(tau_max, max(-tau_max, u))
-        else:
-            tc = max(taus[a], 2.0 * dt)
+        u, p, acc = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
+                          M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        tau[i] += u
+        if p:
             presc[i] = 1
-            presc_qdd[i] = (target - q[i] - 2.0 * tc * qd[i]) / (tc * tc)
+            presc_qdd[i] = acc
 
 
 @njit(**_INLINE)

@@ -20,12 +20,13 @@ from .episode3d_template import TEMPLATE3D
 from .episode_template import TEMPLATE
 
 _HERE = Path(__file__).parent
-_SIM_SOURCES = [_HERE / "planar.py", _HERE / "senses.py", _HERE / "episode_template.py",
-                _HERE.parent / "cache.py"]
+_SIM_SOURCES = [_HERE / "planar.py", _HERE / "senses.py", _HERE / "actuation.py",
+                _HERE / "episode_template.py", _HERE.parent / "cache.py"]
 DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
 ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
 # ---- 3-D figures (Model3D) run the kernel generated from episode3d_template ----
-_SIM3D_SOURCES = [_HERE / "spatial3d.py", _HERE / "episode3d_template.py", _HERE.parent / "cache.py"]
+_SIM3D_SOURCES = [_HERE / "spatial3d.py", _HERE / "actuation.py", _HERE / "episode3d_template.py",
+                  _HERE.parent / "cache.py"]
 
 
 _KERNELS: dict = {}

@@ -60,6 +60,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .actuation import limit_torque, servo
 from .senses import sense_layout
 
 HINGE, SLIDE, FREE = 0, 1, 2
@@ -787,27 +788,15 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
             continue
         d = M.dadr[i]
         x = q[M.qadr[i]]
-        lo, hi, w = M.lo[d], M.hi[d], qd[d]
-        # a limit is a unilateral spring-damper: it pushes back, never pulls
-        if x < lo:
-            tau[d] += max(0.0, limit_k * (lo - x) - limit_c * w)
-        elif x > hi:
-            tau[d] += min(0.0, limit_k * (hi - x) - limit_c * w)
+        tau[d] += limit_torque(x, qd[d], M.lo[d], M.hi[d], limit_k, limit_c)
     for a in range(M.act_dof.shape[0]):
         d = M.act_dof[a]
-        x = q[M.act_q[a]]
-        target, neutral, lo, hi = targets[a], M.neutral[a], M.lo[d], M.hi[d]
-        kp, kd, tau_max = M.kp[a], M.kd[a], M.tau_max[a]
-        if not np.isfinite(target):  # a controller's NaN must not poison the physics
-            target = neutral
-        target = min(hi, max(lo, target))
-        if actuation == 0:
-            u = kp * (target - x) - kd * qd[d]
-            tau[d] += min(tau_max, max(-tau_max, u))
-        else:
-            tc = max(taus[a], 2.0 * dt)
+        u, p, acc = servo(q[M.act_q[a]], qd[d], targets[a], M.neutral[a], M.lo[d], M.hi[d],
+                          M.kp[a], M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        tau[d] += u
+        if p:
             presc[d] = 1
-            presc_qdd[d] = (target - x - 2.0 * tc * qd[d]) / (tc * tc)
+            presc_qdd[d] = acc
 
 
 # ---------------------------------------------------------------- body measures
