@@ -13,8 +13,8 @@ from deap import gp
 from gpmotion.families import make_family
 from gpmotion.gp.bytecode import tokens_to_tree
 from gpmotion.gp.pset import compile_reference
-from gpmotion.gp.toolbox import (adjusted_fitness, crossover_same_dof, make_tree_operators,
-                                 roulette_indices)
+from gpmotion.gp.toolbox import (adjusted_fitness, creep_constants, crossover_same_dof,
+                                 make_tree_operators, roulette_indices)
 from gpmotion.search.gp import GPSearch
 from gpmotion.task import get_task
 
@@ -93,6 +93,33 @@ def test_crossover_only_mixes_trees_of_the_same_dof(family):
         after = [list(map(str, x)) for x in a + b]
         assert [i % 3 for i in range(6) if before[i] != after[i]] in ([], [d], [d, d])
     assert changed == {0, 1, 2}
+
+
+def test_creep_moves_only_the_constants_of_one_tree(family):
+    ind = [tokens_to_tree(["add", t, 0.5 + d], family.info) for d, t in enumerate(TAGS)]
+    ind.append(tokens_to_tree(["px"], family.info))          # a tree without constants
+    random.seed(4)
+    steps, seen = [], set()
+    for _ in range(300):
+        out, d = creep_constants(list(ind), sigma=0.1)
+        seen.add(d)
+        for k, (a, b) in enumerate(zip(ind, out)):
+            if k != d:
+                assert b is a                                    # other trees untouched
+        assert [str(n) for n in out[d]][:2] == [str(n) for n in ind[d]][:2]   # shape kept
+        steps.append(out[d][2].value - ind[d][2].value)
+    assert seen == {0, 1, 2}
+    assert abs(np.mean(steps)) < 0.02 and np.std(steps) == pytest.approx(0.1, rel=0.15)
+    assert creep_constants([ind[3]], 0.1) == ([ind[3]], None)
+
+
+def test_creep_refines_a_constant_that_crossover_cannot(family):
+    # cost = |tree 0 - 0.5| is exactly what a constant step helps; without
+    # creep the search has only the constants it drew at random
+    def best(p_creep):
+        return run(make(family, seed=5, population=20, generations=15, p_creep=p_creep,
+                        p_crossover=0.6, init_depth=(0, 1)), family).best_cost
+    assert best(0.3) < best(0.0)
 
 
 def test_search_keeps_dof_trees_apart(family):
@@ -212,7 +239,8 @@ def test_bad_arguments_raise_one_clear_error(family):
     for kw, msg in [({"population": 1}, "population"), ({"p_crossover": 0.95, "p_mutation": 0.1},
                     "p_crossover"), ({"selection": "rank"}, "selection"),
                     ({"elitism": 50}, "elitism"), ({"max_depth": 30}, "max_depth"),
-                    ({"init_depth": (5, 2)}, "init_depth"), ({"seed": None}, "seed")]:
+                    ({"init_depth": (5, 2)}, "init_depth"), ({"seed": None}, "seed"),
+                    ({"p_creep": 0.5}, "p_creep"), ({"creep_sigma": 0.0}, "creep_sigma")]:
         with pytest.raises(ValueError, match=msg):
             GPSearch(family, **{"seed": 0, "population": 20, **kw})
     s = make(family, selection="tournament", tournament_size=3, generations=2)

@@ -96,7 +96,7 @@ def humanoid3d():
               rod3(f"upper_arm_{side}", 0.3, 2.0, 0.04, (0, 0, -1)),
               rod3(f"fore_arm_{side}", 0.28, 1.5, 0.035, (0, 0, -1))]
         J += [dict(name=f"hip_{side}", parent="pelvis", child=f"thigh_{side}", offset=[0, y, 0],
-                   type="euler", axes="zxy", limits=[-1.5, 1.5], **g),
+                   type="euler", axes="zxy", limits=[-1.45, 1.45], **g),
               dict(name=f"knee_{side}", parent=f"thigh_{side}", child=f"shin_{side}",
                    offset=[0, 0, -0.42], axis=[0, 1, 0], limits=[0.0, 2.5], **g),
               dict(name=f"ankle_{side}", parent=f"shin_{side}", child=f"foot_{side}",
@@ -538,13 +538,18 @@ def test_senses_are_named_and_normalized():
     (lambda s: s["joints"][1].update(axes="zyq"), "axes"),
     (lambda s: s["joints"][1].update(limits=[[-1, 1], [-1, 1]]), "limits"),
     (lambda s: s["joints"][1].update(kp=[1.0, 2.0]), "kp"),
+    (lambda s: s["joints"][1].update(limits=[[-1, 1], [-1.6, 1.6], [-1, 1]]), "gimbal lock"),
+    (lambda s: s["joints"][1].update(axes=[[0, 0, 1], [0, 1, 0], [0, 0, 1]],
+                                       limits=[[-1, 1], [0.05, 0.1], [-1, 1]]),
+     "gimbal lock"),
+    (lambda s: s["joints"][1].update(axes=[[0, 0, 1], [0, 0.01, 1]], limits=[-1, 1]), "parallel"),
     (lambda s: s["root"].update(type="planet"), "root"),
     (lambda s: s["root"].update(position=[0, 0]), "position"),
     (lambda s: s["bodies"][0].update(inertia=[1, -1, 1]), "inertia"),
 ])
 def test_bad_3d_specs_get_one_clear_line(change, message):
     spec = star3d()
-    spec["joints"][1].update(type="euler", axes="zyx")
+    spec["joints"][1].update(type="euler", axes="zyx", limits=[[-3, 3], [-1.2, 1.2], [-3, 3]])
     spec["joints"][1].pop("axis")
     spec["joints"][0].update(type="hinge", axis=[1, 0, 0])
     spec["joints"][0].pop("axes")

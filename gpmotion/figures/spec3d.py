@@ -45,6 +45,9 @@ An ``euler`` joint of k = 1..3 axes (animators'/BVH order: ``axes = "zyx"``
 rotates about z first, then the new y, then the new x, R = Rz·Ry·Rx) becomes
 a chain of k hinge links, the first k−1 massless, named ``<joint>_<axis>``
 (or ``<joint>_<k>`` for vector axes); each is a separate actuator.
+The massless links make a lined-up chain singular, so the compiler refuses
+parallel consecutive axes and a 3-axis chain whose middle axis may reach
+gimbal lock (within 5° of ±90° for "zyx"): give the middle axis limits.
 """
 from __future__ import annotations
 
@@ -190,6 +193,8 @@ def _joint3d(j, bodies, i):
     for lo_hi in lims:
         if not lo_hi[0] < lo_hi[1]:
             raise SpecError(f"{where}: limits must be [lo, hi] with lo < hi, got {list(lo_hi)}")
+    if jt == "euler":
+        _check_gimbal(axes, lims, where)
     neutral = _per_axis(j, "neutral", where, k, 0.0)
     for n_, lh in zip(neutral, lims):
         if not lh[0] <= n_ <= lh[1]:
@@ -212,6 +217,36 @@ def _joint3d(j, bodies, i):
     return dict(name=j["name"], parent=j["parent"], child=j["child"],
                 offset=_vec(j, "offset", where, 3, default=[0.0, 0.0, 0.0]),
                 rot=_rotation(j, where), dofs=dofs)
+
+
+GIMBAL_MARGIN_DEG = 5.0
+
+
+def _rotate(v, axis, angle):
+    """Rodrigues: v rotated by ``angle`` about the unit ``axis``."""
+    c, s = math.cos(angle), math.sin(angle)
+    return v * c + np.cross(axis, v) * s + axis * float(axis @ v) * (1 - c)
+
+
+def _check_gimbal(axes, lims, where):
+    """An Euler chain's intermediate links are massless, so the chain must
+    never lose a rank: consecutive axes not parallel, and (3 axes) the first
+    and third never lined up within the middle axis's limits (gimbal lock:
+    ±90° for a Tait-Bryan "zyx", 0° for a proper "zxz"), else the articulated
+    inertia is singular there and the simulation blows up."""
+    near = math.cos(math.radians(GIMBAL_MARGIN_DEG))
+    for m in range(len(axes) - 1):
+        if abs(float(axes[m] @ axes[m + 1])) > near:
+            raise SpecError(f"{where}: axes {m + 1} and {m + 2} are (nearly) parallel; an euler "
+                            f"joint needs a new direction at every axis")
+    if len(axes) == 3:
+        lo, hi = lims[1]
+        for th in np.linspace(lo, hi, 721):
+            if abs(float(axes[0] @ _rotate(axes[2], axes[1], th))) > near:
+                raise SpecError(
+                    f"{where}: gimbal lock: axes 1 and 3 line up when the middle axis is at "
+                    f"{math.degrees(th):.0f}°; keep its limits at least {GIMBAL_MARGIN_DEG:.0f}° "
+                    f"away (e.g. within ±{90 - GIMBAL_MARGIN_DEG:.0f}° for \"zyx\")")
 
 
 def _points3d(items, kind, bodies):

@@ -41,7 +41,7 @@ HEADER = 2
 OP_PUSH_SENSE, OP_PUSH_CONST, OP_PRIM0 = 0, 1, 2
 
 
-def _is_erc(node) -> bool:
+def is_erc(node) -> bool:
     return isinstance(node, gp.Terminal) and isinstance(type(node), gp.MetaEphemeral)
 
 
@@ -66,7 +66,7 @@ def compile_tree(tree, info: PsetInfo) -> tuple[list[tuple[int, int]], list[floa
             children = [pending.pop() for _ in range(node.arity)]
             frag = [x for ch in children for x in ch] + [("p", prim_op[node.name], node.arity)]
             pending.append(frag)
-        elif _is_erc(node):
+        elif is_erc(node):
             pending.append([("c", float(node.value), 0)])
         elif isinstance(node, gp.Terminal) and node.value in term_sense:
             pending.append([("s", term_sense[node.value], 0)])
@@ -141,7 +141,7 @@ def tree_to_tokens(tree) -> list:
     for node in tree:
         if isinstance(node, gp.Primitive):
             out.append(node.name)
-        elif _is_erc(node):
+        elif is_erc(node):
             out.append(float(node.value))
         else:
             out.append(node.value)

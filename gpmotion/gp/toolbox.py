@@ -16,6 +16,11 @@ Why these choices:
   small tree still gets varied.
 * **Mutation**: ``gp.mutUniform`` with a ``genFull`` depth 0-2 subtree on one
   random DOF.
+* **Constant creep** (not in Gritz & Hahn; the BSR serial search's "creep"
+  step, applied to GP): the random constants of one random DOF's tree move
+  by Gaussian steps.  Crossover and mutation only recombine or redraw
+  constants, so a controller that is 3 cm off a target has no fine step
+  towards it; creep gives one.  Off by default (``p_creep = 0``).
 * **Bloat control**: both operators are wrapped in ``gp.staticLimit`` on
   depth and size; an over-limit child tree is replaced by one of its parent
   trees (of the same DOF).
@@ -38,7 +43,7 @@ from typing import Sequence
 import numpy as np
 from deap import base, creator, gp, tools
 
-from gpmotion.gp.bytecode import MAX_TREE_DEPTH
+from gpmotion.gp.bytecode import MAX_TREE_DEPTH, is_erc
 from gpmotion.task import WORST
 
 FITNESS_CLASS = "GPMotionFitnessMin"
@@ -78,6 +83,24 @@ def mutate_one_dof(ind, tree_mut):
     """``mutUniform`` on one random DOF's tree, in place; returns ``(ind, dof)``."""
     d = random.randrange(len(ind))
     (ind[d],) = tree_mut(gp.PrimitiveTree(ind[d]))
+    return ind, d
+
+
+def creep_constants(ind, sigma: float):
+    """Gaussian step (std ``sigma``) on every constant of one random DOF's tree
+    that has constants, in place; returns ``(ind, dof)`` (None: no constants)."""
+    dofs = [d for d, t in enumerate(ind) if any(is_erc(n) for n in t)]
+    if not dofs:
+        return ind, None
+    d = random.choice(dofs)
+    nodes = []
+    for n in ind[d]:
+        if is_erc(n):
+            c = type(n).__new__(type(n))
+            c.value = float(n.value + random.gauss(0.0, sigma))
+            n = c
+        nodes.append(n)
+    ind[d] = gp.PrimitiveTree(nodes)
     return ind, d
 
 

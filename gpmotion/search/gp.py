@@ -8,8 +8,10 @@ better) and breeds the next generation.  Operators are in
 :mod:`gpmotion.gp.toolbox` (crossover between trees of the same DOF only,
 one random DOF per mating; ``mutUniform`` on one DOF; static depth/size
 limits; roulette on ``1/(1+cost)`` or tournament).  Each new individual is
-made by crossover with ``p_crossover``, mutation with ``p_mutation``, else
-reproduction (a copy); the best ``elitism`` pass unchanged.
+made by crossover with ``p_crossover``, mutation with ``p_mutation``,
+constant creep with ``p_creep`` (Gaussian steps of std ``creep_sigma`` on
+one tree's constants), else reproduction (a copy); the best ``elitism``
+pass unchanged.
 
 Decisions, stated once here:
 
@@ -53,8 +55,8 @@ import numpy as np
 from deap import gp
 
 from gpmotion.gp.bytecode import MAX_TREE_DEPTH, MAX_TREE_SIZE, tokens_to_tree, tree_to_tokens
-from gpmotion.gp.toolbox import (clean_costs, crossover_same_dof, make_tree_operators,
-                                 mutate_one_dof, random_tree, roulette_indices,
+from gpmotion.gp.toolbox import (clean_costs, creep_constants, crossover_same_dof,
+                                 make_tree_operators, mutate_one_dof, random_tree, roulette_indices,
                                  tournament_indices)
 from gpmotion.records import python_random_state_from_json, python_random_state_to_json
 from gpmotion.task import WORST
@@ -78,12 +80,14 @@ class GPSearch:
 
     def __init__(self, family, population: int = 500, generations: int = 50,
                  p_crossover: float = 0.9, p_mutation: float = 0.02,
+                 p_creep: float = 0.0, creep_sigma: float = 0.1,
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True):
         self.family = family
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
+                             p_creep=p_creep, creep_sigma=creep_sigma,
                              selection=selection, tournament_size=tournament_size,
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
                              max_size=max_size, seed=seed, reuse_costs=reuse_costs))
@@ -109,11 +113,17 @@ class GPSearch:
             bad("population must be an integer >= 2", c["population"])
         if not _is_int(c["generations"]) or c["generations"] < 1:
             bad("generations must be an integer >= 1", c["generations"])
-        for k in ("p_crossover", "p_mutation"):
+        c.setdefault("p_creep", 0.0)            # checkpoints written before creep existed
+        c.setdefault("creep_sigma", 0.1)
+        for k in ("p_crossover", "p_mutation", "p_creep"):
             if isinstance(c[k], bool) or not isinstance(c[k], (int, float)) or not 0 <= c[k] <= 1:
                 bad(f"{k} must be a number in [0, 1]", c[k])
-        if c["p_crossover"] + c["p_mutation"] > 1:
-            bad("p_crossover + p_mutation must be <= 1", c["p_crossover"] + c["p_mutation"])
+        total = c["p_crossover"] + c["p_mutation"] + c["p_creep"]
+        if total > 1:
+            bad("p_crossover + p_mutation + p_creep must be <= 1", total)
+        sigma = c["creep_sigma"]
+        if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or not 0 < sigma < 100:
+            bad("creep_sigma must be a number in (0, 100)", sigma)
         if c["selection"] not in SELECTIONS:
             bad(f"selection must be one of {SELECTIONS}", c["selection"])
         if not _is_int(c["tournament_size"]) or c["tournament_size"] < 1:
@@ -132,6 +142,7 @@ class GPSearch:
             bad("seed must be an integer (randomness is explicit)", c["seed"])
         self.population_size, self.generations = int(c["population"]), int(c["generations"])
         self.p_crossover, self.p_mutation = float(c["p_crossover"]), float(c["p_mutation"])
+        self.p_creep, self.creep_sigma = float(c["p_creep"]), float(c["creep_sigma"])
         self.selection, self.tournament_size = c["selection"], int(c["tournament_size"])
         self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
@@ -141,6 +152,7 @@ class GPSearch:
     def config(self) -> dict:
         return {"population": self.population_size, "generations": self.generations,
                 "p_crossover": self.p_crossover, "p_mutation": self.p_mutation,
+                "p_creep": self.p_creep, "creep_sigma": self.creep_sigma,
                 "selection": self.selection, "tournament_size": self.tournament_size,
                 "elitism": self.elitism, "init_depth": list(self.init_depth),
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
@@ -290,6 +302,9 @@ class GPSearch:
             elif r < self.p_crossover + self.p_mutation:
                 (i,) = pick(1)
                 new.append(mutate_one_dof(list(pop[i]), self._mut)[0])
+            elif r < self.p_crossover + self.p_mutation + self.p_creep:
+                (i,) = pick(1)
+                new.append(creep_constants(list(pop[i]), self.creep_sigma)[0])
             else:
                 (i,) = pick(1)
                 new.append(list(pop[i]))
