@@ -27,7 +27,7 @@ _mount_plugin_packages()
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
 from .model import Figure, Model, Scene, make_scene
 from .sim.rollout import Trajectory, rollout, simulate
-from .task import Task, Term, get_task, register_task, task_names
+from .task import Ease, Task, Term, get_task, register_task, task_names
 
 
 def check_primitive(*args, **kw):
@@ -42,6 +42,6 @@ def check_task(*args, **kw):
     return f(*args, **kw)
 
 __version__ = "0.1.0"
-__all__ = ["Task", "Term", "check_primitive", "check_task", "get_task", "register_task", "task_names",
+__all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task", "task_names",
            "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec", "figure_names",
            "load_figure", "make_scene", "register_figure", "rollout", "simulate"]

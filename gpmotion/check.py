@@ -165,4 +165,14 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
             f = term.factor(progress)
             if not 0.0 <= f <= 1.0:
                 raise AssertionError(f"task {name}: phase factor of {term.name} is {f} at {progress}")
+        try:
+            t.scene_at(progress)
+        except Exception as e:  # noqa: BLE001
+            raise AssertionError(f"task {name}: no scene at progress {progress}: {e}") from e
+    if t.params_at(1.0) != t.p:
+        raise AssertionError(f"task {name}: the curriculum does not end at the task's parameters")
+    if t.curriculum:
+        c = ev.evaluate(genomes[:1], 0.0)
+        if not np.all(np.isfinite(c.costs)):
+            raise AssertionError(f"task {name}: non-finite cost at the curriculum's start")
     return None

@@ -43,6 +43,9 @@ def _add_run_args(p):
     p.add_argument("--p-creep", type=float,
                    help="GP constant-creep probability: Gaussian steps on one tree's constants "
                         "(default 0, herman tasks 0.1)")
+    p.add_argument("--islands", type=int,
+                   help="GP island model: demes that breed apart and pass their best around a "
+                        "ring every 5 generations (default 1)")
     p.add_argument("--elitism", type=int, help="GP elites copied unchanged (default 1)")
     p.add_argument("--max-size", type=int, help="GP nodes per tree cap (default 200)")
     p.add_argument("--working", type=int, help="serial search: working controllers C (default 10)")
@@ -170,12 +173,13 @@ def _run_configs(args):
     validate_number("--p-crossover", args.p_crossover, lo=0, hi=1, allow_none=True)
     validate_number("--p-mutation", args.p_mutation, lo=0, hi=1, allow_none=True)
     validate_number("--p-creep", args.p_creep, lo=0, hi=1, allow_none=True)
+    validate_number("--islands", args.islands, lo=1, hi=10_000, integer=True, allow_none=True)
     validate_number("--elitism", args.elitism, lo=0, hi=10**6, integer=True, allow_none=True)
     validate_number("--max-size", args.max_size, lo=1, hi=512, integer=True, allow_none=True)
     gp = args.controller == "gp"
     search = ({"population": args.population, "generations": args.generations,
                "selection": args.selection, "p_crossover": args.p_crossover,
-               "p_mutation": args.p_mutation, "p_creep": args.p_creep,
+               "p_mutation": args.p_mutation, "p_creep": args.p_creep, "islands": args.islands,
                "elitism": args.elitism,
                "max_size": args.max_size} if gp else
               {"n_working": args.working, "n_generations": args.generations,

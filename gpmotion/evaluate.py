@@ -45,12 +45,18 @@ class InProcessEvaluator:
 
     def __post_init__(self):
         self.actuation = self.actuation or self.family.default_actuation
-        self._scene = self.task.scene()
+        self._scenes = {}                     # task phase -> scene (a curriculum moves it)
         self._q0, self._qd0 = self.task.initial_state()
 
-    def rollout(self, genomes, record_senses=False):
+    def scene(self, progress: float = 1.0):
+        key = self.task.phase(progress)[len(self.task.terms):]
+        if key not in self._scenes:
+            self._scenes[key] = self.task.scene_at(progress)
+        return self._scenes[key]
+
+    def rollout(self, genomes, record_senses=False, progress: float = 1.0):
         batch = self.family.encode(genomes)
-        return rollout(self.task.fig, self._scene, batch, n_steps=self.task.n_steps,
+        return rollout(self.task.fig, self.scene(progress), batch, n_steps=self.task.n_steps,
                        q0=self._q0, qd0=self._qd0, dt=self.task.dt,
                        record_every=self.task.record_every, actuation=self.actuation,
                        default_tau=self.family.default_tau,
@@ -61,7 +67,7 @@ class InProcessEvaluator:
         genomes = list(genomes)
         if not genomes:
             return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
-        traj = self.rollout(genomes)
+        traj = self.rollout(genomes, progress=progress)
         costs, measures, ok = self.task.score(traj, progress)
         extras = None
         if self.family.needs_senses:

@@ -17,6 +17,7 @@ scored as it did (like Gymnasium's ``reward_info``).
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -44,12 +45,31 @@ class Term:
     doc: str = ""
 
     def factor(self, progress: float) -> float:
-        a, b = self.phase
-        if progress >= b:
-            return 1.0
-        if progress <= a:
-            return 0.0 if b > a else 1.0
-        return (progress - a) / (b - a)
+        return ramp(self.phase, progress)
+
+
+def ramp(phase: tuple[float, float], progress: float) -> float:
+    """0 before progress a, 1 after b, linear between (1 throughout when a = b)."""
+    a, b = phase
+    if progress >= b:
+        return 1.0
+    if progress <= a:
+        return 0.0 if b > a else 1.0
+    return (progress - a) / (b - a)
+
+
+@dataclass(frozen=True)
+class Ease:
+    """A curriculum on one numeric task parameter: over run progress
+    ``phase = (a, b)`` it eases from ``start`` to the value the task was given
+    (Gritz & Hahn phase style points in; an obstacle can be phased in the
+    same way, so a search first learns the easy motion, then adapts it)."""
+    start: float
+    phase: tuple[float, float]
+    doc: str = ""
+
+    def value(self, end: float, progress: float) -> float:
+        return self.start + (end - self.start) * ramp(self.phase, progress)
 
 
 class Task:
@@ -67,6 +87,7 @@ class Task:
     dt: ClassVar[float] = 1e-3
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
     gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
+    curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
 
     def __init__(self, **overrides):
         unknown = set(overrides) - set(self.params)
@@ -84,6 +105,9 @@ class Task:
                 if not math.isfinite(v):
                     raise ValueError(f"task {self.name}: parameter {k} must be finite, got {v!r}")
             self.p[k] = v
+        for k in self.curriculum:
+            if k not in self.params or isinstance(self.params[k], bool):
+                raise ValueError(f"task {self.name}: curriculum names {k!r}, not a numeric parameter")
         if not 0 < float(self.p.get("seconds", 1.0)) <= 120:
             raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
         self.validate()
@@ -136,6 +160,26 @@ class Task:
             self.fig.sense_index(n)        # raises on an unknown sense
         return names
 
+    def params_at(self, progress: float) -> dict:
+        """The parameters in force at run progress (the curriculum applied)."""
+        return {**self.p, **{k: e.value(float(self.p[k]), progress)
+                             for k, e in self.curriculum.items()}}
+
+    def scene_at(self, progress: float = 1.0) -> Scene:
+        """The scene at run progress: ``scene()`` on the curriculum's parameters."""
+        if not self.curriculum:
+            return self.scene()
+        staged = copy.copy(self)
+        staged.p = self.params_at(progress)
+        return staged.scene()
+
+    def phase(self, progress: float) -> tuple:
+        """Everything a cost depends on through progress: the terms' factors and
+        the curriculum's values (the GP reuses a cost only within one phase)."""
+        return (tuple(float(t.factor(progress)) for t in self.terms)
+                + tuple(float(v) for k, v in sorted(self.params_at(progress).items())
+                        if k in self.curriculum))
+
     def score(self, traj, progress: float = 1.0):
         """(total cost per episode, {term: value}, success per episode)."""
         measures = self.measure(traj)
@@ -163,7 +207,9 @@ class Task:
         return {"task": self.name, "figure": self.figure, "params": dict(self.p),
                 "actuation": self.actuation,
                 "terms": [dict(name=t.name, weight=t.weight, phase=list(t.phase), main=t.main)
-                          for t in self.terms]}
+                          for t in self.terms],
+                "curriculum": {k: dict(start=e.start, phase=list(e.phase))
+                               for k, e in self.curriculum.items()}}
 
 
 # ---- registry --------------------------------------------------------------

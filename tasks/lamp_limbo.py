@@ -7,7 +7,7 @@ penalty for touching it.  Pole height (of its lowest point) is a parameter;
 import numpy as np
 
 from gpmotion.model import make_scene
-from gpmotion.task import Task, Term, register_task
+from gpmotion.task import Ease, Task, Term, register_task
 from gpmotion.tasks.lamp_hop import ARRIVED, HOP_TERMS, count_hops, hop_measures
 
 POLE_RADIUS = 0.01
@@ -22,6 +22,11 @@ class LampLimbo(Task):
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )
+    # The pole comes down over the first half of the run: from above the
+    # standing lamp (0.60 m) to pole_height.  With the full-height pole from
+    # the start most runs settle on standing in front of it (2/5 seeds
+    # solved); lowered gradually, the lamp first learns to hop, then to duck.
+    curriculum = {"pole_height": Ease(0.60, (0.1, 0.5), doc="pole lowered from 0.60 m")}
     success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
 
     def validate(self):

@@ -267,3 +267,29 @@ def test_easimple_with_the_toolbox_on_lamp_hop():
     assert tb.batches == 3 and tb.progress == 1.0
     (cost,) = tb.evaluate(hof[0])
     assert np.isfinite(cost)
+
+
+def test_islands_breed_apart_and_migrate_around_a_ring(family):
+    s = make(family, population=30, islands=3, migrants=2, migrate_every=2, generations=6,
+             p_mutation=0.0)
+    s.load_state_dict(tagged_state(s, family))
+    # island k's DOF-0 trees use only terminal TAGS[k]: without migration they stay apart
+    state = s.state_dict()
+    state["population"] = [family.to_json([[TAGS[i // 10]]] * 3) for i in range(30)]
+    s.load_state_dict(state)
+    g = s.ask()
+    s.tell([0.0 if x[0] == [TAGS[0]] else 1.0 for x in g])          # generation 0 -> 1: no migration
+    assert [ind[0] for ind in s.population] == [[TAGS[i // 10]] for i in range(30)]
+    g = s.ask()
+    s.tell([0.0 if x[0] == [TAGS[0]] else 1.0 for x in g])          # 1 -> 2: migration
+    tags = [ind[0][0] for ind in s.population]
+    islands = [set(tags[k * 10:(k + 1) * 10]) for k in range(3)]
+    for k in range(3):                         # island k took migrants from island k-1 only
+        assert islands[k] <= {TAGS[k], TAGS[k - 1]}
+    assert TAGS[0] in islands[1]               # a cost-0 migrant is island 1's elite
+
+
+def test_one_island_is_the_plain_search(family):
+    a = run(make(family, seed=3), family)
+    b = run(make(family, seed=3, islands=1, migrants=0), family)
+    assert a.population == b.population and a.best == b.best

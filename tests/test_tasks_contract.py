@@ -69,3 +69,35 @@ def test_limbo_pole_hits_are_penalized():
                           n_steps=task.n_steps)
     cost, m, ok = task.score(tr)
     assert m["pole"][0] >= 1.0 and not ok[0]
+
+
+def test_limbo_pole_comes_down_over_the_curriculum():
+    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.families import make_family
+    from gpmotion.search.gp import GPSearch
+    task = get_task("lamp_limbo", pole_height=0.40)
+    ease = task.curriculum["pole_height"]
+    a, b = ease.phase
+    assert task.params_at(0.0)["pole_height"] == ease.start > 0.5      # above the standing lamp
+    assert task.params_at((a + b) / 2)["pole_height"] == pytest.approx((ease.start + 0.40) / 2)
+    assert task.params_at(1.0) == task.p
+    ev = InProcessEvaluator(task, make_family("gp", task))
+    assert ev.scene(0.0).poles[0, 1] == pytest.approx(ease.start + 0.01)
+    assert ev.scene(1.0).poles[0, 1] == pytest.approx(0.41)
+    np.testing.assert_array_equal(ev.scene(1.0).poles, task.scene().poles)
+    # a cost is reused only within one phase: the pole height is part of it
+    s = GPSearch(make_family("gp", task), seed=0, population=4, generations=11)
+    phases = [s.phase_of(g) for g in range(11)]
+    assert phases[0] != phases[3] and phases[-1] == task.phase(1.0)
+    assert len(task.phase(0.3)) == len(task.terms) + 1
+
+
+def test_a_curriculum_must_name_a_numeric_parameter():
+    class Bad(gpmotion.Task):
+        name = "bad_curriculum"
+        figure = "lamp"
+        params = {"seconds": 0.2}
+        terms = (Term("x", 1.0, main=True),)
+        curriculum = {"height": gpmotion.Ease(1.0, (0.0, 0.5))}
+    with pytest.raises(ValueError, match="curriculum names 'height'"):
+        Bad()

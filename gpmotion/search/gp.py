@@ -11,7 +11,10 @@ limits; roulette on ``1/(1+cost)`` or tournament).  Each new individual is
 made by crossover with ``p_crossover``, mutation with ``p_mutation``,
 constant creep with ``p_creep`` (Gaussian steps of std ``creep_sigma`` on
 one tree's constants), else reproduction (a copy); the best ``elitism``
-pass unchanged.
+pass unchanged.  With ``islands`` = K > 1 the population is K demes that
+breed apart (elitism per deme) and every ``migrate_every`` generations pass
+their ``migrants`` best around a ring (an island model: the demes explore
+different solutions, so one stuck deme does not stall the run).
 
 Decisions, stated once here:
 
@@ -81,13 +84,15 @@ class GPSearch:
     def __init__(self, family, population: int = 500, generations: int = 50,
                  p_crossover: float = 0.9, p_mutation: float = 0.02,
                  p_creep: float = 0.0, creep_sigma: float = 0.1,
+                 islands: int = 1, migrate_every: int = 5, migrants: int = 2,
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True):
         self.family = family
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
-                             p_creep=p_creep, creep_sigma=creep_sigma,
+                             p_creep=p_creep, creep_sigma=creep_sigma, islands=islands,
+                             migrate_every=migrate_every, migrants=migrants,
                              selection=selection, tournament_size=tournament_size,
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
                              max_size=max_size, seed=seed, reuse_costs=reuse_costs))
@@ -115,6 +120,8 @@ class GPSearch:
             bad("generations must be an integer >= 1", c["generations"])
         c.setdefault("p_creep", 0.0)            # checkpoints written before creep existed
         c.setdefault("creep_sigma", 0.1)
+        for k, v in (("islands", 1), ("migrate_every", 5), ("migrants", 2)):
+            c.setdefault(k, v)
         for k in ("p_crossover", "p_mutation", "p_creep"):
             if isinstance(c[k], bool) or not isinstance(c[k], (int, float)) or not 0 <= c[k] <= 1:
                 bad(f"{k} must be a number in [0, 1]", c[k])
@@ -128,8 +135,15 @@ class GPSearch:
             bad(f"selection must be one of {SELECTIONS}", c["selection"])
         if not _is_int(c["tournament_size"]) or c["tournament_size"] < 1:
             bad("tournament_size must be an integer >= 1", c["tournament_size"])
-        if not _is_int(c["elitism"]) or not 0 <= c["elitism"] <= c["population"]:
-            bad("elitism must be an integer in [0, population]", c["elitism"])
+        if not _is_int(c["islands"]) or not 1 <= c["islands"] <= c["population"] // 2:
+            bad("islands must be an integer in [1, population / 2]", c["islands"])
+        island = c["population"] // c["islands"]
+        if not _is_int(c["migrate_every"]) or c["migrate_every"] < 1:
+            bad("migrate_every must be an integer >= 1", c["migrate_every"])
+        if not _is_int(c["migrants"]) or not 0 <= c["migrants"] <= island // 2:
+            bad("migrants must be an integer in [0, island size / 2]", c["migrants"])
+        if not _is_int(c["elitism"]) or not 0 <= c["elitism"] <= island:
+            bad("elitism must be an integer in [0, population / islands]", c["elitism"])
         if not _is_int(c["max_depth"]) or not 1 <= c["max_depth"] <= MAX_TREE_DEPTH:
             bad(f"max_depth must be an integer in [1, {MAX_TREE_DEPTH}]", c["max_depth"])
         if not _is_int(c["max_size"]) or not 1 <= c["max_size"] <= MAX_TREE_SIZE:
@@ -143,6 +157,8 @@ class GPSearch:
         self.population_size, self.generations = int(c["population"]), int(c["generations"])
         self.p_crossover, self.p_mutation = float(c["p_crossover"]), float(c["p_mutation"])
         self.p_creep, self.creep_sigma = float(c["p_creep"]), float(c["creep_sigma"])
+        self.islands, self.migrate_every = int(c["islands"]), int(c["migrate_every"])
+        self.migrants = int(c["migrants"])
         self.selection, self.tournament_size = c["selection"], int(c["tournament_size"])
         self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
@@ -153,6 +169,8 @@ class GPSearch:
         return {"population": self.population_size, "generations": self.generations,
                 "p_crossover": self.p_crossover, "p_mutation": self.p_mutation,
                 "p_creep": self.p_creep, "creep_sigma": self.creep_sigma,
+                "islands": self.islands, "migrate_every": self.migrate_every,
+                "migrants": self.migrants,
                 "selection": self.selection, "tournament_size": self.tournament_size,
                 "elitism": self.elitism, "init_depth": list(self.init_depth),
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
@@ -180,10 +198,11 @@ class GPSearch:
         return self.progress_of(self.generation)
 
     def phase_of(self, generation: int) -> tuple:
-        """The style-term factors in force at ``generation`` (what a cost depends on)."""
+        """What a cost depends on at ``generation``: the task's style-term factors
+        and curriculum values (``Task.phase``)."""
         p = self.progress_of(generation)
-        terms = getattr(getattr(self.family, "task", None), "terms", None)
-        return tuple(float(t.factor(p)) for t in terms) if terms else (p,)
+        task = getattr(self.family, "task", None)
+        return task.phase(p) if task is not None else (p,)
 
     def _cache_phase(self, generation: int) -> tuple:
         return self.phase_of(generation) if self.reuse_costs else (float(generation),)
@@ -283,22 +302,51 @@ class GPSearch:
             row["n_failed"] = int(np.sum(evaluation.failed))
         self.history.append(row)
 
+    def _island_bounds(self) -> list[tuple[int, int]]:
+        """[lo, hi) index range of every island in the flat population."""
+        k, n = self.islands, self.population_size
+        edges = [i * n // k for i in range(k + 1)]
+        return list(zip(edges[:-1], edges[1:]))
+
+    def _migrate(self, pop: list, costs: np.ndarray):
+        """Ring migration: each island's ``migrants`` best replace the next
+        island's worst (copies, with their costs, before breeding)."""
+        pop, costs = list(pop), costs.copy()
+        bounds = self._island_bounds()
+        best = [lo + np.argsort(costs[lo:hi], kind="stable")[:self.migrants] for lo, hi in bounds]
+        for i, (lo, hi) in enumerate(bounds):
+            src = best[i - 1]                        # from the previous island of the ring
+            worst = lo + np.argsort(costs[lo:hi], kind="stable")[::-1][:len(src)]
+            for w, b in zip(worst, src):
+                pop[w], costs[w] = pop[b], costs[b]
+        return pop, costs
+
     def _breed(self) -> list:
-        """Next population: elites, then crossover / mutation / reproduction."""
-        costs = self.costs.tolist()
-        order = np.argsort(self.costs, kind="stable")
-        new = [list(self._pop[i]) for i in order[:self.elitism]]   # trees are never
-        pop = self._pop                                             # modified in place
+        """Next population, island by island (one island: the whole population)."""
+        pop, costs = self._pop, self.costs
+        if self.islands > 1 and (self.generation + 1) % self.migrate_every == 0:
+            pop, costs = self._migrate(pop, costs)
+        new = []
+        for lo, hi in self._island_bounds():
+            new += self._breed_deme(pop[lo:hi], costs[lo:hi])
+        return new
+
+    def _breed_deme(self, pop: list, costs: np.ndarray) -> list:
+        """Elites, then crossover / mutation / creep / reproduction, within one deme."""
+        size = len(pop)
+        order = np.argsort(costs, kind="stable")
+        costs = costs.tolist()
+        new = [list(pop[i]) for i in order[:self.elitism]]   # trees are never modified in place
 
         def pick(k):
             return (roulette_indices(costs, k) if self.selection == "roulette"
                     else tournament_indices(costs, k, self.tournament_size))
-        while len(new) < self.population_size:
+        while len(new) < size:
             r = random.random()
             if r < self.p_crossover:
                 i, j = pick(2)
                 a, b, _ = crossover_same_dof(list(pop[i]), list(pop[j]), self._cx)
-                new.extend([a, b][:self.population_size - len(new)])
+                new.extend([a, b][:size - len(new)])
             elif r < self.p_crossover + self.p_mutation:
                 (i,) = pick(1)
                 new.append(mutate_one_dof(list(pop[i]), self._mut)[0])
