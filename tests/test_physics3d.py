@@ -604,3 +604,26 @@ def test_site_sense_flag_is_checked(where, value, message):
     spec[where][0]["sense"] = value
     with pytest.raises(SpecError, match=message):
         gpmotion.load_figure(spec)
+
+
+def _gizmo():
+    from tests.test_bvh import gizmo            # a slide joint and rest rotations
+    return gizmo()
+
+
+@pytest.mark.parametrize("make", [humanoid3d, star3d, chain3d, _gizmo, lambda: "herman"])
+def test_compiled_points_match_the_numpy_kinematics(make):
+    """``points_fast`` (numba, what a Trajectory's sites and segments use) is
+    the numpy ``link_frames`` + ``points_world`` to rounding, also for the
+    fixed root body (link −1), a free root and a slide joint."""
+    from gpmotion.sim import geometry3d
+    fig = gpmotion.load_figure(make())
+    m = fig.model
+    rng = np.random.default_rng(1)
+    q = np.tile(fig.q_default, (3, 5, 1)) + rng.normal(0, 0.6, (3, 5, fig.nq))
+    links = np.concatenate([m.seg_link, [-1]])
+    local = np.concatenate([m.seg_a, [[0.1, -0.2, 0.3]]])
+    ref = geometry3d.points_world(m, *geometry3d.link_frames(m, q), links, local)
+    np.testing.assert_allclose(geometry3d.points_fast(m, q, links, local), ref, atol=1e-12)
+    tr_sites = geometry3d.points_fast(m, q, fig.site_link, fig.site_pos)
+    np.testing.assert_allclose(tr_sites, geometry3d.sites_world(fig, q), atol=1e-12)

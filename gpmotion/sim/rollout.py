@@ -101,18 +101,24 @@ class Trajectory:
     def is3d(self) -> bool:
         return isinstance(self.figure.model, Model3D)
 
-    def poses(self) -> np.ndarray:
-        """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms.
-
-        Computed once per Trajectory (scores ask for it several times); the
-        result is read-only."""
-        cached = self.__dict__.get("_poses")
+    def _memo(self, key: str, compute):
+        """``compute()`` once per Trajectory (scores ask for poses and sites
+        several times); keyed on ``q`` so a ``replace``d copy recomputes.
+        Results are read-only."""
+        key = "_memo" + key                      # not to shadow the methods
+        cached = self.__dict__.get(key)
         if cached is None or cached[0] is not self.q:
-            geo = geometry3d if self.is3d else geometry
-            poses = geo.link_poses(self.figure.model, self.q)
-            poses.setflags(write=False)
-            cached = self.__dict__["_poses"] = (self.q, poses)
+            value = compute()
+            for v in value if isinstance(value, tuple) else (value,):
+                v.setflags(write=False)
+            cached = self.__dict__[key] = (self.q, value)
         return cached[1]
+
+    def poses(self) -> np.ndarray:
+        """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms."""
+        if self.is3d:
+            return self._memo("_poses", lambda: geometry3d.link_poses(self.figure.model, self.q))
+        return self._memo("_poses", lambda: geometry.link_poses(self.figure.model, self.q))
 
     def base(self) -> np.ndarray:
         """Base (root body) pose [E, F, 3] = (pitch, x, z); 3-D: [E, F, 7] (x, y, z, qw, qx, qy, qz)."""
@@ -124,18 +130,24 @@ class Trajectory:
         return self.poses()[..., m.base_link, :]
 
     def sites(self) -> np.ndarray:
+        """World positions of the figure's sites [E, F, n_sites, 2 or 3]."""
         f = self.figure
         if self.is3d:
-            return geometry3d.sites_world(f, self.q)
-        return geometry.points_world(f.model, self.poses(), f.site_link, f.site_pos)
+            return self._memo("_sites", lambda: geometry3d.points_fast(
+                f.model, self.q, f.site_link, f.site_pos))
+        return self._memo("_sites", lambda: geometry.points_world(
+            f.model, self.poses(), f.site_link, f.site_pos))
 
     def site(self, name: str) -> np.ndarray:
         return self.sites()[..., self.figure.site_names.index(name), :]
 
     def segments(self) -> np.ndarray:
         if self.is3d:
-            return geometry3d.segments_world(self.figure.model, self.q)
-        return geometry.segments_world(self.figure.model, self.q)
+            m = self.figure.model
+            return self._memo("_segments", lambda: np.stack(
+                [geometry3d.points_fast(m, self.q, m.seg_link, m.seg_a),
+                 geometry3d.points_fast(m, self.q, m.seg_link, m.seg_b)], axis=-2))
+        return self._memo("_segments", lambda: geometry.segments_world(self.figure.model, self.q))
 
     def sense(self, name: str) -> np.ndarray:
         if self.senses is None:
