@@ -1,12 +1,13 @@
 """Figure specs: shipped figures compile; bad specs give one clear line (CLI: exit 2)."""
 import copy
+import textwrap
 
 import numpy as np
 import pytest
 
 import gpmotion
 from gpmotion.cli import main
-from gpmotion.figures import SpecError, compile_spec, figure_names
+from gpmotion.figures import SpecError, compile_spec, figure_names, load_figure
 from tests import figures_for_tests as F
 
 
@@ -96,3 +97,36 @@ def test_a_scene_without_ground_lets_the_lamp_fall_freely():
     # semi-implicit Euler's exact discrete free fall: z_n = z_0 − g·dt²·n(n+1)/2
     assert tr.com[0, -1, 1] == pytest.approx(z0 - 9.81 * dt ** 2 * n * (n + 1) / 2, abs=1e-9)
     assert tr.contact_force.max() == 0
+
+
+def test_a_figure_variant_extends_a_shipped_one(tmp_path, monkeypatch):
+    """`extends`: tables merge, named entries update by name or append."""
+    (tmp_path / "tall_lamp.toml").write_text(textwrap.dedent('''
+        extends = "lamp"
+        name = "tall_lamp"
+        [[bodies]]
+        name = "lower_arm"
+        mass = 0.5
+        [[joints]]
+        name = "elbow"
+        kp = 123.0
+        [[sites]]
+        name = "antenna"
+        body = "head"
+        position = [0.1, 0.0]
+    '''))
+    base, fig = load_figure("lamp"), load_figure(str(tmp_path / "tall_lamp.toml"))
+    assert fig.name == "tall_lamp" and fig.body_names == base.body_names
+    assert fig.site_names == base.site_names + ["antenna"]
+    k = fig.actuator_names.index("elbow")
+    assert fig.model.kp[k] == 123.0 and base.model.kp[k] != 123.0
+    others = [i for i in range(base.n_act) if i != k]
+    assert np.array_equal(fig.model.kp[others], base.model.kp[others])
+    assert fig.total_mass == pytest.approx(base.total_mass + 0.25)      # lower arm 0.25 -> 0.5 kg
+    with pytest.raises(SpecError, match="unknown figure 'nope'"):
+        load_figure({"extends": "nope"})
+    from gpmotion import figures
+    monkeypatch.setitem(figures._REGISTRY, "loop_a", {"extends": "loop_b"})
+    monkeypatch.setitem(figures._REGISTRY, "loop_b", {"extends": "loop_a"})
+    with pytest.raises(SpecError, match="loop"):
+        load_figure("loop_a")

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..model import Figure
-from .spec import SpecError, compile_spec, load_spec
+from .spec import SpecError, compile_spec, load_spec, merge_spec
 from .spec3d import compile_spec3d, planar_spec_to_3d
 
 _HERE = Path(__file__).parent
@@ -23,25 +23,41 @@ def figure_names() -> list[str]:
     return sorted(_REGISTRY)
 
 
+def resolve_spec(spec: dict, _seen=()) -> dict:
+    """A spec with its ``extends = "figure"`` chain merged in (``merge_spec``)."""
+    base = spec.get("extends")
+    if base is None:
+        return spec
+    if not isinstance(base, str) or base not in _REGISTRY:
+        raise SpecError(f"extends: unknown figure {base!r}; known: {', '.join(figure_names())}")
+    if base in _seen:
+        raise SpecError(f"extends: figures extend each other in a loop: {' -> '.join(_seen + (base,))}")
+    src = _REGISTRY[base]
+    parent = resolve_spec(src if isinstance(src, dict) else load_spec(src), _seen + (base,))
+    return merge_spec(parent, spec)
+
+
 def load_figure(name_or_spec) -> Figure:
-    """A compiled Figure from a registered name, a TOML path, or a spec dict."""
+    """A compiled Figure from a registered name, a TOML path, or a spec dict
+    (a spec may start from another figure: ``extends = "herman"``)."""
     if isinstance(name_or_spec, Figure):
         return name_or_spec
     if isinstance(name_or_spec, dict):
-        return compile_spec(name_or_spec)
+        return compile_spec(resolve_spec(name_or_spec))
     key = str(name_or_spec)
     if key in _CACHE:
         return _CACHE[key]
     if key in _REGISTRY:
         src = _REGISTRY[key]
-        fig = compile_spec(src if isinstance(src, dict) else load_spec(src))
+        fig = compile_spec(resolve_spec(src if isinstance(src, dict) else load_spec(src), (key,)))
     elif key.endswith(".toml") or Path(key).exists():
-        fig = compile_spec(load_spec(key))
+        fig = compile_spec(resolve_spec(load_spec(key)))
     else:
         raise SpecError(f"unknown figure {key!r}; known: {', '.join(figure_names())}")
     _CACHE[key] = fig
     return fig
 
 
-__all__ = ["SpecError", "compile_spec", "compile_spec3d", "load_spec", "load_figure",
+__all__ = ["SpecError", "compile_spec", "compile_spec3d", "load_spec", "load_figure", "merge_spec",
+           "resolve_spec",
            "planar_spec_to_3d", "register_figure", "figure_names"]

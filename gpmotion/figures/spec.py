@@ -6,6 +6,10 @@ Body frames: a body's origin is the joint that attaches it to its parent
 is given in that frame, x along the body, z across it.  Inertia is either
 given or derived from ``shape`` ("rod": thin rod along the segment, "box":
 segment length × 2·radius) about the centre of mass.
+
+A variant of a registered figure is a small spec with ``extends = "herman"``:
+it lists only what differs (``merge_spec``: tables merge; bodies, joints,
+contacts and sites update by ``name`` or append).
 """
 from __future__ import annotations
 
@@ -39,6 +43,38 @@ def load_spec(path: str | Path) -> dict:
         raise SpecError(f"{path}: no such figure file") from None
     except tomllib.TOMLDecodeError as e:
         raise SpecError(f"{path}: not valid TOML ({e})") from None
+
+
+NAMED_LISTS = ("bodies", "joints", "contacts", "sites")
+
+
+def merge_spec(base: dict, over: dict) -> dict:
+    """``over`` laid on ``base`` (what ``extends = "figure"`` does): tables merge
+    key by key; in the named lists (bodies, joints, contacts, sites) an entry
+    whose ``name`` exists updates that entry, a new name is appended; any
+    other value replaces the base's.  Neither input is modified."""
+    out = dict(base)
+    for key, value in over.items():
+        if key == "extends":
+            continue
+        old = out.get(key)
+        if key in NAMED_LISTS and isinstance(old, list) and isinstance(value, list):
+            merged = [dict(x) if isinstance(x, dict) else x for x in old]
+            index = {x.get("name"): i for i, x in enumerate(merged) if isinstance(x, dict)}
+            for item in value:
+                if not isinstance(item, dict) or not isinstance(item.get("name"), str):
+                    raise SpecError(f"{key}: every entry of an extending spec needs a 'name'")
+                if item["name"] in index:
+                    merged[index[item["name"]]].update(item)
+                else:
+                    index[item["name"]] = len(merged)
+                    merged.append(dict(item))
+            out[key] = merged
+        elif isinstance(old, dict) and isinstance(value, dict):
+            out[key] = {**old, **value}
+        else:
+            out[key] = value
+    return out
 
 
 def _num(d, key, where, default=None, lo=None, positive=False):
