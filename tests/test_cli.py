@@ -97,6 +97,9 @@ def test_ctrl_c_checkpoints_and_exits_cleanly(tmp_path):
     (["run", "lamp_hop", "--param", "bogus=1"], "unknown parameter"),
     (["run", "lamp_hop", "--controller", "nn"], "unknown controller"),
     (["render", "--figure", "nope"], "unknown figure"),
+    (["run", "lamp_hop", "--p-creep", "0.5"], "p_creep"),
+    (["run", "lamp_hop", "--islands", "0"], "--islands"),
+    (["run", "lamp_hop", "--islands", "200"], "islands"),
     (["compare", "lamp_hop", "--controllers", "gp,xx"], "unknown"),
 ])
 def test_bad_input_is_one_line_and_exit_2(argv, needle, tmp_path, capsys):
