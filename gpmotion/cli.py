@@ -256,7 +256,7 @@ def cmd_replay(args):
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name)
+        render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name, task=task)
         print(f"  wrote {out / 'filmstrip.png'} and {out / 'motion.gif'}")
         if family.name == "gp":
             from .run import plot_gp_trees
@@ -288,7 +288,7 @@ def cmd_render(args):
         validate_number("--seconds", args.seconds, lo=0.01, hi=120)
         fig = load_figure(args.figure)
         traj = simulate(fig, args.seconds)
-        title = f"{fig.name}: holding its neutral pose"
+        title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from .replay import load_controller, replay_genome
         task, family, actuation, genome, rec = load_controller(args.source)
@@ -300,7 +300,7 @@ def cmd_render(args):
             from .run import plot_gp_trees
             plot_gp_trees(args.trees, task, family, genome)
             print(f"wrote {args.trees}")
-    render_trajectory(traj, args.output, args.gif, title=title)
+    render_trajectory(traj, args.output, args.gif, title=title, task=task)
     print(f"wrote {args.output}" + (f" and {args.gif}" if args.gif else ""))
 
 

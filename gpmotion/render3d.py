@@ -309,13 +309,15 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=
 
 # ------------------------------------------------------------- dispatcher
 
-def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, targets=None) -> None:
+def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, targets=None,
+               view: dict | None = None) -> None:
     """Filmstrip PNG and/or GIF of episode ``e`` of a Trajectory: the planar
     renderer (:mod:`gpmotion.render`) for planar figures, the 3-D one otherwise.
 
-    Scene: ground (if any), limbo poles and the goal come from ``traj.scene``
-    (a 3-D figure's goal is the scene's (x, z) at y = 0, as the kernel sees it);
-    ``targets`` (3-D only): extra points ``[n, 3]`` to mark.
+    Scene: ground (if any), limbo poles and the goal come from ``traj.scene``;
+    ``targets`` (3-D only): extra points ``[n, 3]`` to mark.  ``view`` (3-D
+    only; a task's ``view``): camera ``elev``/``azim``, ``bodies`` to draw
+    (a close-up: the axis limits follow them) and ``ground`` (False: no grid).
     """
     from .model import Model
     if not 0 <= e < traj.n_episodes:
@@ -333,8 +335,19 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, target
         if gif:
             render.animate(gif, seg, radii, traj.times, **kw)
         return
-    goal = (float(sc.goal[0]), 0.0, float(sc.goal[1]))
-    kw = dict(poles=poles, ground_z=ground_z, goal=goal, targets=targets, title=title)
+    view = dict(view or {})
+    bodies = view.pop("bodies", None)
+    if bodies is not None:
+        names = traj.figure.body_names
+        unknown = [b for b in bodies if b not in names]
+        if unknown:
+            raise ValueError(f"view: unknown bodies {unknown}")
+        keep = [names.index(b) for b in bodies]
+        seg, radii = seg[:, keep], radii[keep]
+    if not view.pop("ground", True):
+        ground_z = None
+    goal = (float(sc.goal[0]), float(sc.goal_y), float(sc.goal[1]))
+    kw = dict(poles=poles, ground_z=ground_z, goal=goal, targets=targets, title=title, **view)
     if filmstrip:
         filmstrip3d(filmstrip, seg, radii, traj.times, **kw)
     if gif:

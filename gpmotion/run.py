@@ -227,7 +227,7 @@ def write_best(rd: RunDir, cfg, task, family, actuation, search, replay):
 def write_artifacts(rd: RunDir, task, family, genome, traj):
     from . import render
     render_trajectory(traj, rd.artifact("filmstrip.png"), rd.artifact("motion.gif"),
-                      title=f"{task.name} ({family.name})")
+                      title=f"{task.name} ({family.name})", task=task)
     if family.name == "gp":
         plot_gp_trees(rd.artifact("trees.png"), task, family, genome)
     rows = rd.read_log()
@@ -244,7 +244,7 @@ def plot_gp_trees(path, task, family, genome):
     plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 
-def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0):
-    """Filmstrip PNG and/or GIF of one episode, planar or 3-D."""
+def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0, task=None):
+    """Filmstrip PNG and/or GIF of one episode, planar or 3-D (with the task's view)."""
     from .render3d import render_any
-    render_any(traj, filmstrip, gif, title=title, e=e)
+    render_any(traj, filmstrip, gif, title=title, e=e, view=getattr(task, "view", None))

@@ -88,6 +88,7 @@ class Task:
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
     gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
     curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
+    view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
     def __init__(self, **overrides):
         unknown = set(overrides) - set(self.params)

@@ -46,6 +46,13 @@ MAIN_WEIGHT = 10.0
 GP_DEFAULTS = {"population": 400, "generations": 50, "p_crossover": 0.85, "p_creep": 0.1}
 
 
+# Pictures of an arm task: the upper body, seen from the front right (mostly its
+# right side: the right arm towards the camera), without the floor grid.
+VIEW = {"elev": 10, "azim": -80, "ground": False,
+        "bodies": ["pelvis", "torso", "head", "upper_arm_r", "forearm_r", "hand_r",
+                   "upper_arm_l", "forearm_l", "hand_l"]}
+
+
 def goal_scene(point):
     """The default scene with the goal (senses' reference) at a world point (x, y, z)."""
     from gpmotion.model import make_scene

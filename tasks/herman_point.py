@@ -10,7 +10,7 @@ to the right at shoulder height.  Style points as every Herman arm task.
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, TERMINALS, goal_scene, site_at_rest,
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, TERMINALS, goal_scene, site_at_rest,
                                     style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
@@ -40,6 +40,7 @@ class HermanPoint(Task):
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
+    view = VIEW
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              *style_terms(scale=WEIGHT))

@@ -10,7 +10,7 @@ of the torso, disturb the held joints little, spend little work, end at rest.
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, MAIN_WEIGHT, TERMINALS, goal_scene,
                                     site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
@@ -31,6 +31,7 @@ class HermanTouchNose(Task):
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
+    view = VIEW
     terms = (Term("nose", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–nose distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              *style_terms())

@@ -12,7 +12,7 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, MAIN_WEIGHT, TERMINALS, goal_scene,
                                     style_measures, style_terms)
 
 TOUCH = 0.04           # m
@@ -34,6 +34,7 @@ class HermanTouchObject(Task):
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
+    view = VIEW
     terms = (Term("object", MAIN_WEIGHT, main=True, doc="fingertip–object distance at the end (m)"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"

@@ -17,7 +17,7 @@ Style points as every Herman arm task except "ends at rest" (it is waving).
 import numpy as np
 
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, goal_scene,
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, MAIN_WEIGHT, TERMINALS, goal_scene,
                                     site_at_rest, style_measures, style_terms)
 
 ABOVE = 0.05          # m above the shoulder counts as "raised"
@@ -77,6 +77,7 @@ class HermanWave(Task):
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
+    view = VIEW
     terms = (Term("wave", MAIN_WEIGHT, main=True,
                   doc="mean of: hand below the shoulder, too few passes, too small a swing (0..1)"),
              *style_terms(rest=False))

@@ -121,3 +121,20 @@ def test_render_any_draws_planar_and_3d_trajectories(tmp_path, figure):
     assert (tmp_path / "only.gif").exists() and not (tmp_path / "only.png").exists()
     with pytest.raises(ValueError, match="episode"):
         render3d.render_any(traj, tmp_path / "g.png", e=1)
+
+
+def test_a_task_view_draws_a_close_up_of_some_bodies(tmp_path, monkeypatch):
+    task = gpmotion.get_task("herman_touch_nose")
+    traj = gpmotion.simulate(task.fig, 0.05, record_every=25)
+    seen = {}
+    monkeypatch.setattr(render3d, "filmstrip3d", lambda path, seg, rad, t, **kw: seen.update(
+        seg=seg, rad=rad, **kw))
+    render3d.render_any(traj, tmp_path / "f.png", view=task.view)
+    names = task.view["bodies"]
+    assert seen["seg"].shape[1] == len(names) == len(seen["rad"]) < len(task.fig.body_names)
+    i = task.fig.body_names.index(names[-1])
+    np.testing.assert_array_equal(seen["seg"][:, -1], traj.segments()[0, :, i])
+    assert seen["ground_z"] is None and seen["azim"] == task.view["azim"]
+    assert task.view["bodies"] == names                   # the task's view is not consumed
+    with pytest.raises(ValueError, match="unknown bodies"):
+        render3d.render_any(traj, tmp_path / "g.png", view={"bodies": ["tail"]})
