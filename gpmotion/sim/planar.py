@@ -118,12 +118,16 @@ def link_inertia(M, i, I):
 
 
 @njit(**_INLINE)
-def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd):
+def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
     ``presc[i] != 0`` marks dof i as kinematic: its acceleration is
     ``presc_qdd[i]``; on return ``tau[i]`` holds the torque that realises it.
-    ``fext[i]`` is the external spatial force on link i in link coordinates.
+    ``arm[i]`` is a joint armature (the implicit PD term, ``actuation.py``):
+    the joint force is ``tau[i] − arm[i]·q̈[i]``, so ``arm`` adds to the
+    joint's ``d = SᵀIᴬS``; on return ``tau[i]`` of a non-prescribed dof
+    holds that force.  ``fext[i]`` is the external spatial force on link i
+    in link coordinates.
     Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
     (bias forces), ``a[nl, 3]`` (link accelerations).
     """
@@ -148,7 +152,7 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
     for i in range(nl - 1, -1, -1):
         k = M.jtype[i]
         p = M.parent[i]
-        pr, w, ti = presc[i], presc_qdd[i], tau[i]
+        pr, w, ti, ai = presc[i], presc_qdd[i], tau[i], arm[i]
         a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
         e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
         pa0, pa1, pa2 = pA[i, 0], pA[i, 1], pA[i, 2]
@@ -169,8 +173,8 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
                 e2 += w
             ud = 0.0
         else:
-            # Ia = IA − U Uᵀ / d
-            dinv = 1.0 / d
+            # Ia = IA − U Uᵀ / D with D = d + armature (U = IA S is unchanged)
+            dinv = 1.0 / (d + ai)
             ud = (ti - pk) * dinv
             w0, w1, w2 = u0 * dinv, u1 * dinv, u2 * dinv
             a00 -= u0 * w0
@@ -215,7 +219,7 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         a1 = x10 * ap0 + c * ap1 + s * ap2 + cbias[i, 1]
         a2 = x20 * ap0 - s * ap1 + c * ap2 + cbias[i, 2]
         i00, i01, i02, i11, i12, i22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
-        pr, w, ti = presc[i], presc_qdd[i], tau[i]
+        pr, w, ti, ai = presc[i], presc_qdd[i], tau[i], arm[i]
         if k == 0:
             u0, u1, u2, d, pk = i00, i01, i02, i00, pA[i, 0]
         elif k == 1:
@@ -225,7 +229,7 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         if pr:
             acc = w
         else:
-            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) / d
+            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) / (d + ai)
         qdd[i] = acc
         if k == 0:
             a0 += acc
@@ -236,6 +240,8 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         a[i, 0], a[i, 1], a[i, 2] = a0, a1, a2
         if pr:
             ti = u0 * a0 + u1 * a1 + u2 * a2 + pk
+        else:
+            ti -= ai * acc          # the joint force of an implicit servo
         tau[i] = ti
 
 
@@ -374,18 +380,23 @@ def pole_contacts(M, S, pose, cs, v, fext):
 
 
 @njit(**_INLINE)
-def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
-    """Passive damping, joint limits, then PD servos or kinematic responses."""
+def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm):
+    """Passive damping, joint limits, then PD servos or kinematic responses.
+
+    ``arm[i]``: the armature that makes dof i's PD servo implicit (for :func:`aba`).
+    """
     limit_k, limit_c = M.limit_k, M.limit_c
     for i in range(q.shape[0]):
         tau[i] = -M.damping[i] * qd[i]
         presc[i] = 0
+        arm[i] = 0.0
         tau[i] += limit_torque(q[i], qd[i], M.lo[i], M.hi[i], limit_k, limit_c)
     for a in range(M.act_dof.shape[0]):
         i = M.act_dof[a]
-        u, p, acc = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
-                          M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        u, p, acc, ar = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
+                              M.kd[a], M.tau_max[a], taus[a], actuation, dt)
         tau[i] += u
+        arm[i] += ar
         if p:
             presc[i] = 1
             presc_qdd[i] = acc
