@@ -116,7 +116,7 @@ def test_aba_matches_dense_hybrid_dynamics(name, M):
             else np.zeros(n)
         qdd, tau_k = np.zeros(n), tau.copy()
         planar.aba(M, qd, X, v, cbias, tau_k, fext, presc, presc_qdd, arm, 9.81,
-                   np.zeros((n, 6)), np.zeros((n, 3)), np.zeros((n, 3)), qdd)
+                   np.zeros((n, 6)), np.zeros((n, 3)), np.zeros(n), np.zeros((n, 3)), qdd)
         rqdd, rtau = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc.astype(bool), presc_qdd,
                                           arm)
         assert close(qdd, rqdd), (name, trial, np.abs(qdd - rqdd).max())

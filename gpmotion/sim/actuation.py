@@ -51,8 +51,7 @@ def servo(x, w, target, neutral, lo, hi, kp, kd, tau_max, tau_c, actuation, dt):
     target = min(hi, max(lo, target))
     if actuation == 0:
         u = kp * (target - x) - kd * w
-        if abs(u) < tau_max:
-            return u, 0, 0.0, dt * (kd + dt * kp)
-        return min(tau_max, max(-tau_max, u)), 0, 0.0, 0.0
+        arm = dt * (kd + dt * kp) if abs(u) < tau_max else 0.0
+        return min(tau_max, max(-tau_max, u)), 0, 0.0, arm
     tc = max(tau_c, 2.0 * dt)
     return 0.0, 1, (target - x - 2.0 * tc * w) / (tc * tc), 0.0

@@ -37,6 +37,7 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     cs = np.zeros((nl, 2))
     IA = np.zeros((nl, 6))
     pA = np.zeros((nl, 3))
+    dinv = np.zeros(nl)
     acc = np.zeros((nl, 3))
     qdd = np.zeros(nl)
     tau = np.zeros(nl)
@@ -106,7 +107,7 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
         if step == n_steps:
             break
         joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm)
-        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, S.gravity, IA, pA, acc, qdd)
+        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, S.gravity, IA, pA, dinv, acc, qdd)
         for a in range(na):
             i = M.act_dof[a]
             energy += abs(tau[i] * qd[i]) * dt

@@ -118,7 +118,7 @@ def link_inertia(M, i, I):
 
 
 @njit(**_INLINE)
-def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, a, qdd):
+def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, dinv, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
     ``presc[i] != 0`` marks dof i as kinematic: its acceleration is
@@ -129,7 +129,8 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, a
     holds that force.  ``fext[i]`` is the external spatial force on link i
     in link coordinates.
     Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
-    (bias forces), ``a[nl, 3]`` (link accelerations).
+    (bias forces), ``dinv[nl]`` (1/D, so pass 3 multiplies), ``a[nl, 3]``
+    (link accelerations).
     """
     nl = qd.shape[0]
     for i in range(nl):
@@ -172,17 +173,19 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, a
             else:
                 e2 += w
             ud = 0.0
+            di = 0.0
         else:
             # Ia = IA − U Uᵀ / D with D = d + armature (U = IA S is unchanged)
-            dinv = 1.0 / (d + ai)
-            ud = (ti - pk) * dinv
-            w0, w1, w2 = u0 * dinv, u1 * dinv, u2 * dinv
+            di = 1.0 / (d + ai)
+            ud = (ti - pk) * di
+            w0, w1, w2 = u0 * di, u1 * di, u2 * di
             a00 -= u0 * w0
             a01 -= u0 * w1
             a02 -= u0 * w2
             a11 -= u1 * w1
             a12 -= u1 * w2
             a22 -= u2 * w2
+        dinv[i] = di
         pa0 += a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
         pa1 += a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
         pa2 += a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
@@ -219,17 +222,17 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, a
         a1 = x10 * ap0 + c * ap1 + s * ap2 + cbias[i, 1]
         a2 = x20 * ap0 - s * ap1 + c * ap2 + cbias[i, 2]
         i00, i01, i02, i11, i12, i22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
-        pr, w, ti, ai = presc[i], presc_qdd[i], tau[i], arm[i]
+        pr, w, ti, ai, di = presc[i], presc_qdd[i], tau[i], arm[i], dinv[i]
         if k == 0:
-            u0, u1, u2, d, pk = i00, i01, i02, i00, pA[i, 0]
+            u0, u1, u2, pk = i00, i01, i02, pA[i, 0]
         elif k == 1:
-            u0, u1, u2, d, pk = i01, i11, i12, i11, pA[i, 1]
+            u0, u1, u2, pk = i01, i11, i12, pA[i, 1]
         else:
-            u0, u1, u2, d, pk = i02, i12, i22, i22, pA[i, 2]
+            u0, u1, u2, pk = i02, i12, i22, pA[i, 2]
         if pr:
             acc = w
         else:
-            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) / (d + ai)
+            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) * di
         qdd[i] = acc
         if k == 0:
             a0 += acc
