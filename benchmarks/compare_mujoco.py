@@ -40,7 +40,9 @@ link offsets and joint axes are the same numbers the kernel uses:
 * actuators are MuJoCo ``<position>`` servos with ``kp``, ``kv`` (= our kd),
   ``ctrlrange`` = the joint limits (our targets are clamped to them too) and
   ``forcerange`` = ± our torque limit: force = clamp(kp·(ctrl − q) − kv·q̇),
-  exactly our PD law;
+  our PD law (ours is implicit in the velocity — an armature dt·(kd + dt·kp)
+  on unsaturated servos, ``gpmotion/sim/actuation.py`` — where MuJoCo's
+  ``Euler`` treats actuator gains explicitly; the same work per step);
 * ground contact: a plane, and a small sphere (radius 1 mm) at each of our
   contact points, friction μ = the scene's μ, condim 3.  Contact softness is
   MuJoCo's own soft-constraint model (default solref/solimp) rather than our

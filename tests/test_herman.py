@@ -83,6 +83,37 @@ def test_herman_arm_servos_are_stable_over_random_poses(herman):
     assert np.abs(tr.qd[:, -1]).max() < 0.05
 
 
+def test_herman_standing_stands_for_5_s_at_the_default_step():
+    """The free-pelvis variant on its feet, holding neutral with PD at dt = 1 ms.
+
+    It needs the implicit PD servos: the light pelvis (I ≈ 0.04 kg·m²) sits
+    between the hip and waist servos (Σkd·dt/I ≈ 7), which an explicit PD
+    cannot hold at this step (it jitters and falls within ~1 s)."""
+    from gpmotion.controllers import schedule
+    fig = gpmotion.load_figure("herman_standing")
+    assert fig.root == "free" and fig.nv == 35
+    # the scene its TOML names: 1e5 N/m per sole point resists tipping with
+    # k·Σx² ≈ 7300 N·m/rad, ten times m·g·h ≈ 690 (the default 5000 N/m: 370,
+    # it would tip over); 400 N·s/m damps the bounce on the soles (~11 /s)
+    k = 1e5
+    scene = gpmotion.make_scene(k_ground=k, c_ground=400.0)
+    tr = gpmotion.rollout(fig, scene, schedule.constant(fig.model.neutral), n_steps=5000,
+                          record_every=10)
+    assert not tr.diverged[0]
+    pelvis = tr.base()[0]                                          # (x, y, z, quaternion)
+    assert np.abs(pelvis[:, :2] - pelvis[0, :2]).max() < 0.02      # within 2 cm horizontally
+    assert pelvis[:, 2].min() > pelvis[0, 2] - 1e-3                # does not sink (< 1 mm)
+    feet = [fig.contact_names.index(n) for n in ("heel_r", "toe_r", "heel_l", "toe_l")]
+    soles = [fig.site_names.index(n) for n in ("foot_r", "foot_l")]
+    weight = fig.total_mass * 9.81
+    # the soles sink only as far as the ground springs must to carry the weight
+    assert geometry3d.sites_world(fig, tr.q[0, -1])[soles, 2].min() > -2 * weight / (4 * k)
+    assert np.abs(tr.qd[0, -1]).max() < 1e-3                       # at rest at the end
+    assert tr.contact_force[0, -1, feet].sum() == pytest.approx(weight, rel=0.01)
+    others = np.setdiff1d(np.arange(len(fig.contact_names)), feet)
+    assert tr.contact_force[0, :, others].max() == 0.0             # nothing else touches
+
+
 # ---------------------------------------------------------------- the tasks
 @pytest.mark.parametrize("name", HERMAN_TASKS)
 def test_herman_task_passes_check_task(name):

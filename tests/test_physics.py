@@ -4,6 +4,7 @@ import pytest
 
 import gpmotion
 from gpmotion.controllers import schedule
+from gpmotion.figures import planar_spec_to_3d
 from tests import figures_for_tests as F
 from tests.reference import planar_ref as ref
 
@@ -116,6 +117,128 @@ def test_pd_servo_holds_with_the_static_error_gravity_demands():
     # small-angle static balance: kp·err = m g (L/2) cos(θ)
     assert err == pytest.approx(m * 9.81 * L / 2 * np.cos(err) / kp, rel=1e-3)
     assert np.abs(tr.qd[0, -20:]).max() < 1e-6
+
+
+# ---- implicit PD ("stable PD"): the servo's armature a = dt·(kd + dt·kp) ----
+def _servo_link(dims, **joint):
+    """A light rod (30 g, 10 cm: I = 1e-4 kg·m² about its joint) on one servo."""
+    spec = F.pendulum(actuated=True, mass=0.03, length=0.1, **joint)
+    return gpmotion.load_figure(spec if dims == 2 else planar_spec_to_3d(spec))
+
+
+def _step_matrix(I, kp, kd, dt, arm):
+    """One semi-implicit Euler step of I θ̈ = −kp·e − kd·θ̇ (e = θ − θ*) with
+    armature ``arm``, on (dt·θ̇, e): dt·θ̇⁺ = (1 − α)·dt·θ̇ − β·e,  e⁺ = e + dt·θ̇⁺,
+    with α = kd·dt/(I + arm) and β = kp·dt²/(I + arm)."""
+    al, be = kd * dt / (I + arm), kp * dt * dt / (I + arm)
+    return np.array([[1 - al, -be], [1 - al, 1 - be]])
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+def test_light_link_servo_settles_with_implicit_pd(dims):
+    """kd·dt/I = 10: an explicit PD servo diverges, the implicit one settles.
+
+    The step matrix A (:func:`_step_matrix`) has det A = 1 − α, tr A = 2 − α − β.
+    Explicit (no armature): α = kd·dt/I = 10, det A = −9, so one eigenvalue is
+    ≤ −3: the error triples and flips sign every step.  Implicit (armature
+    dt·(kd + dt·kp)): α + β = dt·(kd + dt·kp)/(I + dt·(kd + dt·kp)) < 1, so
+    |det A| < 1, 1 − tr A + det A = β > 0 and 1 + tr A + det A = 4 − 2α − β > 0
+    (Jury): both eigenvalues inside the unit circle for every I > 0 and any gains.
+    """
+    I, dt, kp, kd, target = 1e-4, 1e-3, 20.0, 1.0, 0.5
+    assert kd * dt / I == pytest.approx(10.0)
+    explicit = np.abs(np.linalg.eigvals(_step_matrix(I, kp, kd, dt, 0.0))).max()
+    implicit = np.abs(np.linalg.eigvals(_step_matrix(I, kp, kd, dt, dt * (kd + dt * kp)))).max()
+    assert explicit > 3.0 and implicit < 0.99
+    fig = _servo_link(dims, kp=kp, kd=kd)
+    m = fig.model
+    com = m.com[0]
+    icom = m.icom[0] if dims == 2 else m.icom[0, 1, 1]
+    assert icom + m.mass[0] * (com @ com) == pytest.approx(I)
+    tr = gpmotion.rollout(fig, gpmotion.make_scene(gravity=0.0, ground=False),
+                          schedule.constant([target]), n_steps=1000, dt=dt, record_every=1)
+    theta = tr.q[0, :, 0]
+    assert not tr.diverged[0]
+    assert abs(theta[-1] - target) < 1e-6 and abs(tr.qd[0, -1, 0]) < 1e-6
+    # overdamped (poles −kp/kd and −kd/I): a monotone approach, no overshoot, no rattle
+    assert np.all(np.diff(theta) >= 0.0) and theta.max() <= target
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+@pytest.mark.parametrize("tau_max", [100.0, 0.05])
+def test_one_servo_step_is_the_implicit_update(dims, tau_max):
+    """From rest, one step toward θ*: θ̇⁺ = dt·kp·θ*/(I + dt·kd + dt²·kp) when the
+    servo is not saturated; a saturated one (kp·θ* > τ_max) acts explicitly,
+    θ̇⁺ = dt·τ_max/I."""
+    I, dt, kp, kd, target = 1e-4, 1e-3, 20.0, 1.0, 0.5
+    fig = _servo_link(dims, kp=kp, kd=kd, torque_limit=tau_max)
+    tr = gpmotion.rollout(fig, gpmotion.make_scene(gravity=0.0, ground=False),
+                          schedule.constant([target]), n_steps=1, dt=dt, record_every=1)
+    if kp * target < tau_max:
+        expected = dt * kp * target / (I + dt * kd + dt * dt * kp)
+    else:
+        expected = dt * tau_max / I
+    assert tr.qd[0, 1, 0] == pytest.approx(expected, rel=1e-12)
+    assert tr.q[0, 1, 0] == pytest.approx(dt * expected, rel=1e-12)
+
+
+def _pendulum_constants():
+    """(I about the joint, m·g·(L/2), the hanging angle's offset from straight down
+    — the spec's −1.5708 is not quite −π/2)."""
+    m = gpmotion.load_figure(F.pendulum(actuated=True)).model
+    return (m.icom[0] + m.mass[0] * (m.com[0] @ m.com[0]), m.mass[0] * 9.81 * m.com[0, 0],
+            m.xtree[0, 0] + np.pi / 2)
+
+
+def _pendulum_step_response(dt, seconds, target, kp, kd, implicit=True):
+    """θ(t) of the actuated pendulum (1 kg, 1 m rod, hanging) stepped to ``target``
+    by semi-implicit Euler in numpy: I θ̈ = u − m g (L/2) sin(θ + off), u = kp(θ* − θ)
+    − kd θ̇, with (``implicit``) or without the servo's armature."""
+    I, mgc, off = _pendulum_constants()
+    arm = dt * (kd + dt * kp) if implicit else 0.0
+    th = w = 0.0
+    out = [th]
+    for _ in range(int(round(seconds / dt))):
+        w += dt * (kp * (target - th) - kd * w - mgc * np.sin(th + off)) / (I + arm)
+        th += dt * w
+        out.append(th)
+    return np.array(out)
+
+
+def _pendulum_exact(seconds, target, kp, kd, h=1e-4):
+    """The same ODE by RK4 at a small step (the continuous-time answer)."""
+    I, mgc, off = _pendulum_constants()
+
+    def f(y):
+        return np.array([y[1], (kp * (target - y[0]) - kd * y[1] - mgc * np.sin(y[0] + off)) / I])
+    y = np.zeros(2)
+    out = [0.0]
+    for _ in range(int(round(seconds / h))):
+        k1 = f(y)
+        k2 = f(y + 0.5 * h * k1)
+        k3 = f(y + 0.5 * h * k2)
+        k4 = f(y + h * k3)
+        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out.append(y[0])
+    return np.array(out)
+
+
+def test_pd_step_response_is_the_explicit_one_to_first_order():
+    """Modest gains (the test pendulum's kp 50, kd 2: kd·dt/I = 0.006): the
+    implicit servo's step response is the kernel's numpy recursion, and it
+    differs from the exact response, and from the explicit servo's, by O(dt)."""
+    kp, kd, target, T = 50.0, 2.0, 0.3, 3.0
+    exact = _pendulum_exact(T, target, kp, kd)[::100]            # every 10 ms
+    err, gap = [], []
+    for dt, every in ((1e-3, 10), (5e-4, 20)):
+        fig, tr = run(F.pendulum(actuated=True), T, dt=dt, record_every=every,
+                      targets=np.array([target]))
+        theta = tr.q[0, :, 0]
+        assert np.abs(theta - _pendulum_step_response(dt, T, target, kp, kd)[::every]).max() < 1e-12
+        err.append(np.abs(theta - exact).max())
+        gap.append(np.abs(theta - _pendulum_step_response(dt, T, target, kp, kd, False)[::every]).max())
+    assert err[0] < 0.01 * target and gap[0] < 0.01 * target
+    assert 0.4 < err[1] / err[0] < 0.6 and 0.4 < gap[1] / gap[0] < 0.6
 
 
 def test_kinematic_actuation_follows_the_tau_law():

@@ -398,7 +398,7 @@ def test_aba_kernel_matches_rnea_crba_reference(prescribe):
     M = fig.model
     nl, nv = len(M.parent), fig.nv
     rng = np.random.default_rng(1 + prescribe)
-    for _ in range(5):
+    for trial in range(5):
         q, qd = random_state(fig, rng)
         tau = rng.normal(0, 2, nv)
         fext = rng.normal(0, 2, (nl, 6))
@@ -406,16 +406,23 @@ def test_aba_kernel_matches_rnea_crba_reference(prescribe):
         presc_qdd = rng.normal(0, 3, nv)
         if prescribe:
             presc[[7, 9, 11]] = 1
+        # implicit-PD armature on the joints (not the free root), none on the last trial
+        arm = np.zeros(nv)
+        if trial < 4:
+            arm[6:] = np.where(rng.random(nv - 6) < 0.6, rng.uniform(0.0, 0.5, nv - 6), 0.0)
         s = scratch(fig)
         K.kinematics(M, q, qd, s["R"], s["pos"], s["E"], s["r"], s["v"], s["c"])
         qdd = np.zeros(nv)
         t = tau.copy()
-        K.aba(M, qd, s["E"], s["r"], s["v"], s["c"], t, fext, presc, presc_qdd, 9.81,
+        K.aba(M, qd, s["E"], s["r"], s["v"], s["c"], t, fext, presc, presc_qdd, arm, 9.81,
               np.zeros((nl, 6, 6)), np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros(nl),
               np.zeros(nl), np.zeros((nl, 6)), qdd, np.zeros((3, 6, 6)), np.zeros((3, 6)))
-        qdd_ref, tau_ref = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc, presc_qdd)
+        qdd_ref, tau_ref = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc, presc_qdd, arm)
         assert np.allclose(qdd, qdd_ref, rtol=1e-9, atol=1e-9)
         assert np.allclose(t, tau_ref, rtol=1e-9, atol=1e-9)
+        if trial == 0:      # the armature mattered
+            assert (arm > 0).any() and not np.allclose(qdd, ref.forward_dynamics(
+                M, q, qd, tau, 9.81, fext, presc, presc_qdd)[0], rtol=1e-6, atol=1e-6)
 
 
 def test_contact_kernel_matches_the_reference():

@@ -100,6 +100,7 @@ def test_kinematics_matches_reference(name, M):
 def test_aba_matches_dense_hybrid_dynamics(name, M):
     rng = np.random.default_rng(11)
     n = len(M.parent)
+    mattered = 0                    # trials where the armature changed q̈
     for trial in range(20):
         q, qd = random_state(M, rng)
         pose, X, v, cbias, cs = run_kinematics(M, q, qd)
@@ -109,13 +110,22 @@ def test_aba_matches_dense_hybrid_dynamics(name, M):
         if presc.all():
             presc[rng.integers(n)] = 0
         presc_qdd = rng.normal(0, 10, n)
+        # implicit-PD armature on about half the dofs from trial 10 on (big
+        # enough to matter: the links' own inertias are ~0.01–0.5)
+        arm = np.where(rng.random(n) < 0.5, rng.uniform(0.0, 0.5, n), 0.0) if trial >= 10 \
+            else np.zeros(n)
         qdd, tau_k = np.zeros(n), tau.copy()
-        planar.aba(M, qd, X, v, cbias, tau_k, fext, presc, presc_qdd, 9.81,
-                   np.zeros((n, 6)), np.zeros((n, 3)), np.zeros((n, 3)), qdd)
-        rqdd, rtau = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc.astype(bool), presc_qdd)
+        planar.aba(M, qd, X, v, cbias, tau_k, fext, presc, presc_qdd, arm, 9.81,
+                   np.zeros((n, 6)), np.zeros((n, 3)), np.zeros(n), np.zeros((n, 3)), qdd)
+        rqdd, rtau = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc.astype(bool), presc_qdd,
+                                          arm)
         assert close(qdd, rqdd), (name, trial, np.abs(qdd - rqdd).max())
-        assert close(tau_k, rtau), (name, trial)                 # prescribed dofs: the torque
-        assert np.array_equal(tau_k[presc == 0], tau[presc == 0])  # free dofs: untouched
+        assert close(tau_k, rtau), (name, trial)   # prescribed: the torque; armature: τ − a·q̈
+        plain = (presc == 0) & (arm == 0)
+        assert np.array_equal(tau_k[plain], tau[plain])          # other free dofs: untouched
+        no_arm = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc.astype(bool), presc_qdd)[0]
+        mattered += not close(qdd, no_arm, 1e-6)
+    assert mattered >= 5
 
 
 @pytest.mark.parametrize("name, M", FIGURES, ids=IDS)

@@ -59,6 +59,7 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
     fext = np.zeros((nl, 6))
     presc = np.zeros(nv, dtype=np.int64)
     presc_qdd = np.zeros(nv)
+    arm = np.zeros(nv)             # implicit-PD armature per dof (joint_torques → aba_packed)
     anchor = np.zeros((nc, 2))
     touching = np.zeros(nc)
     cforce = np.zeros(nc)
@@ -119,9 +120,9 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
         countdown -= 1
         if step == n_steps:
             break
-        joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
-        aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, IA, pA, U, Ut,
-                   dinv, uu, acc, qdd, L6, b6, x6)
+        joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm)
+        aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, Ib, IA, pA,
+                   U, Ut, dinv, uu, acc, qdd, L6, b6, x6)
         for a in range(na):
             d = act_dof[a]
             energy += abs(tau[d] * qd[d]) * dt

@@ -37,12 +37,14 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     cs = np.zeros((nl, 2))
     IA = np.zeros((nl, 6))
     pA = np.zeros((nl, 3))
+    dinv = np.zeros(nl)
     acc = np.zeros((nl, 3))
     qdd = np.zeros(nl)
     tau = np.zeros(nl)
     fext = np.zeros((nl, 3))
     presc = np.zeros(nl, dtype=np.int64)
     presc_qdd = np.zeros(nl)
+    arm = np.zeros(nl)             # implicit-PD armature per dof (joint_torques → aba)
     anchor = np.zeros(nc)
     touching = np.zeros(nc)
     cforce = np.zeros(nc)
@@ -104,8 +106,8 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
         countdown -= 1
         if step == n_steps:
             break
-        joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
-        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, S.gravity, IA, pA, acc, qdd)
+        joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm)
+        aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, S.gravity, IA, pA, dinv, acc, qdd)
         for a in range(na):
             i = M.act_dof[a]
             energy += abs(tau[i] * qd[i]) * dt

@@ -118,14 +118,19 @@ def link_inertia(M, i, I):
 
 
 @njit(**_INLINE)
-def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd):
+def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, dinv, a, qdd):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
     ``presc[i] != 0`` marks dof i as kinematic: its acceleration is
     ``presc_qdd[i]``; on return ``tau[i]`` holds the torque that realises it.
-    ``fext[i]`` is the external spatial force on link i in link coordinates.
+    ``arm[i]`` is a joint armature (the implicit PD term, ``actuation.py``):
+    the joint force is ``tau[i] − arm[i]·q̈[i]``, so ``arm`` adds to the
+    joint's ``d = SᵀIᴬS``; on return ``tau[i]`` of a non-prescribed dof
+    holds that force.  ``fext[i]`` is the external spatial force on link i
+    in link coordinates.
     Scratch: ``IA[nl, 6]`` (packed articulated inertias), ``pA[nl, 3]``
-    (bias forces), ``a[nl, 3]`` (link accelerations).
+    (bias forces), ``dinv[nl]`` (1/D, so pass 3 multiplies), ``a[nl, 3]``
+    (link accelerations).
     """
     nl = qd.shape[0]
     for i in range(nl):
@@ -148,7 +153,7 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
     for i in range(nl - 1, -1, -1):
         k = M.jtype[i]
         p = M.parent[i]
-        pr, w, ti = presc[i], presc_qdd[i], tau[i]
+        pr, w, ti, ai = presc[i], presc_qdd[i], tau[i], arm[i]
         a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
         e0, e1, e2 = cbias[i, 0], cbias[i, 1], cbias[i, 2]
         pa0, pa1, pa2 = pA[i, 0], pA[i, 1], pA[i, 2]
@@ -168,17 +173,19 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
             else:
                 e2 += w
             ud = 0.0
+            di = 0.0
         else:
-            # Ia = IA − U Uᵀ / d
-            dinv = 1.0 / d
-            ud = (ti - pk) * dinv
-            w0, w1, w2 = u0 * dinv, u1 * dinv, u2 * dinv
+            # Ia = IA − U Uᵀ / D with D = d + armature (U = IA S is unchanged)
+            di = 1.0 / (d + ai)
+            ud = (ti - pk) * di
+            w0, w1, w2 = u0 * di, u1 * di, u2 * di
             a00 -= u0 * w0
             a01 -= u0 * w1
             a02 -= u0 * w2
             a11 -= u1 * w1
             a12 -= u1 * w2
             a22 -= u2 * w2
+        dinv[i] = di
         pa0 += a00 * e0 + a01 * e1 + a02 * e2 + u0 * ud
         pa1 += a01 * e0 + a11 * e1 + a12 * e2 + u1 * ud
         pa2 += a02 * e0 + a12 * e1 + a22 * e2 + u2 * ud
@@ -215,17 +222,17 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         a1 = x10 * ap0 + c * ap1 + s * ap2 + cbias[i, 1]
         a2 = x20 * ap0 - s * ap1 + c * ap2 + cbias[i, 2]
         i00, i01, i02, i11, i12, i22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
-        pr, w, ti = presc[i], presc_qdd[i], tau[i]
+        pr, w, ti, ai, di = presc[i], presc_qdd[i], tau[i], arm[i], dinv[i]
         if k == 0:
-            u0, u1, u2, d, pk = i00, i01, i02, i00, pA[i, 0]
+            u0, u1, u2, pk = i00, i01, i02, pA[i, 0]
         elif k == 1:
-            u0, u1, u2, d, pk = i01, i11, i12, i11, pA[i, 1]
+            u0, u1, u2, pk = i01, i11, i12, pA[i, 1]
         else:
-            u0, u1, u2, d, pk = i02, i12, i22, i22, pA[i, 2]
+            u0, u1, u2, pk = i02, i12, i22, pA[i, 2]
         if pr:
             acc = w
         else:
-            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) / d
+            acc = (ti - pk - (u0 * a0 + u1 * a1 + u2 * a2)) * di
         qdd[i] = acc
         if k == 0:
             a0 += acc
@@ -236,6 +243,8 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, a, qdd
         a[i, 0], a[i, 1], a[i, 2] = a0, a1, a2
         if pr:
             ti = u0 * a0 + u1 * a1 + u2 * a2 + pk
+        else:
+            ti -= ai * acc          # the joint force of an implicit servo
         tau[i] = ti
 
 
@@ -374,18 +383,23 @@ def pole_contacts(M, S, pose, cs, v, fext):
 
 
 @njit(**_INLINE)
-def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
-    """Passive damping, joint limits, then PD servos or kinematic responses."""
+def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm):
+    """Passive damping, joint limits, then PD servos or kinematic responses.
+
+    ``arm[i]``: the armature that makes dof i's PD servo implicit (for :func:`aba`).
+    """
     limit_k, limit_c = M.limit_k, M.limit_c
     for i in range(q.shape[0]):
         tau[i] = -M.damping[i] * qd[i]
         presc[i] = 0
+        arm[i] = 0.0
         tau[i] += limit_torque(q[i], qd[i], M.lo[i], M.hi[i], limit_k, limit_c)
     for a in range(M.act_dof.shape[0]):
         i = M.act_dof[a]
-        u, p, acc = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
-                          M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        u, p, acc, ar = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
+                              M.kd[a], M.tau_max[a], taus[a], actuation, dt)
         tau[i] += u
+        arm[i] += ar
         if p:
             presc[i] = 1
             presc_qdd[i] = acc

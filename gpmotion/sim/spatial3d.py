@@ -53,7 +53,7 @@ into locals up front, branches on scalars, ``error_model="numpy"``):
 
 The plain-numpy twins (RNEA + CRBA + dense solve) are in
 ``tests/reference/spatial3d_ref.py``; :func:`aba` keeps the first version's
-signature (6×6 scratch) for scripts and tests and runs :func:`aba_packed`.
+signature (6×6 scratch, plus ``arm``) for scripts and tests and runs :func:`aba_packed`.
 """
 from __future__ import annotations
 
@@ -359,15 +359,19 @@ def _solve_packed6(IA, i, b, L, x):
 
 
 @njit(**_INLINE)
-def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, IA, pA, U,
-               Ut, dinv, uu, a, qdd, L, b6, x6):
+def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, Ib, IA, pA,
+               U, Ut, dinv, uu, a, qdd, L, b6, x6):
     """Articulated-body forward dynamics with prescribed accelerations (hybrid).
 
     ``presc[d] != 0`` marks dof d (of a 1-dof link) as kinematic: its
     acceleration is ``presc_qdd[d]``; on return ``tau[d]`` holds the force
-    that realises it.  ``fext[i]`` is the external spatial force on link i
-    in link coordinates.  ``Ib[nl, 10]``: :func:`body_inertias`.  Scratch:
-    ``IA[nl, 21]`` (packed articulated inertias), ``pA[nl, 6]``, ``U[nl, 6]``
+    that realises it.  ``arm[d]`` is a joint armature (the implicit PD term,
+    ``actuation.py``; 0 on a free root): the joint force is
+    ``tau[d] − arm[d]·q̈[d]``, so ``arm`` adds to the joint's ``d = SᵀIᴬS``;
+    on return ``tau[d]`` of a non-prescribed joint holds that force.  ``fext[i]``
+    is the external spatial force on link i in link coordinates.
+    ``Ib[nl, 10]``: :func:`body_inertias`.  Scratch: ``IA[nl, 21]`` (packed
+    articulated inertias), ``pA[nl, 6]``, ``U[nl, 6]``
     (``IA·S``), ``Ut[nl, 6]`` (``Xᵀ U``, parent coordinates), ``dinv[nl]``,
     ``uu[nl]`` (``τ − Sᵀ pA − Uᵀ c``), ``a[nl, 6]``, ``L[6, 6]``, ``b6[6]``, ``x6[6]``.
 
@@ -411,7 +415,7 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, 
         p = parent[i]
         da = dadr[i]
         sx, sy, sz = axis[i, 0], axis[i, 1], axis[i, 2]
-        pr, w, ti = presc[da], presc_qdd[da], tau[da]
+        pr, w, ti, ai = presc[da], presc_qdd[da], tau[da], arm[da]
         a00, a01, a02, a11, a12, a22 = IA[i, 0], IA[i, 1], IA[i, 2], IA[i, 3], IA[i, 4], IA[i, 5]
         b00, b01, b02 = IA[i, 6], IA[i, 7], IA[i, 8]
         b10, b11, b12 = IA[i, 9], IA[i, 10], IA[i, 11]
@@ -451,8 +455,9 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, 
             g3 += sx * wp
             g4 += sy * wp
             g5 += sz * wp
-        # a prescribed joint moves as told: the parent sees the whole IA (gain 0)
-        di = 0.0 if pr else 1.0 / d
+        # a prescribed joint moves as told: the parent sees the whole IA (gain 0);
+        # D = d + armature (U = IA S is unchanged)
+        di = 0.0 if pr else 1.0 / (d + ai)
         u = ti - sp
         # U in parent coordinates, Ũ = Xᵀ U (Ũ·a_p = U·X a_p: pass 3's dot product)
         tf0 = e00 * uf0 + e10 * uf1 + e20 * uf2
@@ -562,7 +567,7 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, 
         un0, un1, un2, uf0, uf1, uf2 = U[i, 0], U[i, 1], U[i, 2], U[i, 3], U[i, 4], U[i, 5]
         tn0, tn1, tn2, tf0, tf1, tf2 = Ut[i, 0], Ut[i, 1], Ut[i, 2], Ut[i, 3], Ut[i, 4], Ut[i, 5]
         pn0, pn1, pn2, pf0, pf1, pf2 = pA[i, 0], pA[i, 1], pA[i, 2], pA[i, 3], pA[i, 4], pA[i, 5]
-        di, u, pr, w = dinv[i], uu[i], presc[da], presc_qdd[da]
+        di, u, pr, w, ti, ai = dinv[i], uu[i], presc[da], presc_qdd[da], tau[da], arm[da]
         ua = (tn0 * b0 + tn1 * b1) + (tn2 * b2 + tf0 * b3) + (tf1 * b4 + tf2 * b5)
         acc = w if pr else (u - ua) * di
         l0 = b3 - (r1 * b2 - r2 * b1)
@@ -595,6 +600,8 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib, 
         a[i, 0], a[i, 1], a[i, 2], a[i, 3], a[i, 4], a[i, 5] = a0, a1, a2, a3, a4, a5
         if pr:
             tau[da] = sp + un0 * a0 + un1 * a1 + un2 * a2 + uf0 * a3 + uf1 * a4 + uf2 * a5
+        else:
+            tau[da] = ti - ai * acc         # the joint force of an implicit servo
 
 
 @njit(**_INLINE)
@@ -615,8 +622,8 @@ def _free_root_solve(IA, i, tau, da, pA, a0, a1, a2, a3, a4, a5, L, b6, x6):
 
 
 @njit(**_JIT)
-def aba(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, U, dinv, uu, a,
-        qdd, work, vec):
+def aba(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, U, dinv, uu,
+        a, qdd, work, vec):
     """:func:`aba_packed` behind the first version's signature (for scripts and tests).
 
     ``IA[nl, 6, 6]``, ``work[3, 6, 6]`` and ``vec[3, 6]`` are unused (the packed
@@ -627,7 +634,7 @@ def aba(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, IA, pA, U, 
     nl = M.parent.shape[0]
     Ib = np.empty((nl, N_IB))
     body_inertias(M, Ib)
-    aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, gravity, Ib,
+    aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, Ib,
                np.empty((nl, N_IA)), pA, U, np.empty((nl, 6)), dinv, uu, a, qdd, np.zeros((6, 6)), np.zeros(6),
                np.zeros(6))
 
@@ -777,12 +784,16 @@ def pole_contacts(M, S, R, pos, v, fext):
 
 # ---------------------------------------------------------------- actuation
 @njit(**_INLINE)
-def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd):
-    """Passive damping, joint limits, then PD servos or kinematic responses (per dof)."""
+def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd, arm):
+    """Passive damping, joint limits, then PD servos or kinematic responses (per dof).
+
+    ``arm[d]``: the armature that makes dof d's PD servo implicit (for :func:`aba_packed`).
+    """
     limit_k, limit_c = M.limit_k, M.limit_c
     for d in range(qd.shape[0]):
         tau[d] = -M.damping[d] * qd[d]
         presc[d] = 0
+        arm[d] = 0.0
     for i in range(M.parent.shape[0]):
         if M.jtype[i] == FREE:
             continue
@@ -791,9 +802,10 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd)
         tau[d] += limit_torque(x, qd[d], M.lo[d], M.hi[d], limit_k, limit_c)
     for a in range(M.act_dof.shape[0]):
         d = M.act_dof[a]
-        u, p, acc = servo(q[M.act_q[a]], qd[d], targets[a], M.neutral[a], M.lo[d], M.hi[d],
-                          M.kp[a], M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        u, p, acc, ar = servo(q[M.act_q[a]], qd[d], targets[a], M.neutral[a], M.lo[d], M.hi[d],
+                              M.kp[a], M.kd[a], M.tau_max[a], taus[a], actuation, dt)
         tau[d] += u
+        arm[d] += ar
         if p:
             presc[d] = 1
             presc_qdd[d] = acc

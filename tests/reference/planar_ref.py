@@ -94,12 +94,18 @@ def crba(M, q):
     return H
 
 
-def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None):
-    """qdd (and the torques of prescribed dofs) by dense hybrid dynamics."""
+def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None, arm=None):
+    """qdd (and the torques of prescribed dofs) by dense hybrid dynamics.
+
+    ``arm`` (per dof, default 0): the implicit-PD armature — a free dof's
+    joint force is ``tau − arm·qdd``, so the system matrix is H + diag(arm);
+    the returned torques of free dofs are those joint forces.
+    """
     n = len(q)
     presc = np.zeros(n, bool) if presc is None else np.asarray(presc, bool)
+    arm = np.zeros(n) if arm is None else np.asarray(arm, float)
     C = rnea(M, q, qd, np.zeros(n), gravity, fext)
-    H = crba(M, q)
+    H = crba(M, q) + np.diag(np.where(presc, 0.0, arm))
     free = ~presc
     qdd = np.zeros(n)
     if presc.any():
@@ -107,7 +113,8 @@ def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None):
     rhs = tau[free] - C[free] - H[np.ix_(free, presc)] @ qdd[presc]
     qdd[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
     tau_out = np.array(tau, dtype=float)
-    tau_out[presc] = (H @ qdd + C)[presc]
+    tau_out[presc] = (H @ qdd + C)[presc]          # arm is 0 on prescribed dofs
+    tau_out[free] -= arm[free] * qdd[free]
     return qdd, tau_out
 
 
