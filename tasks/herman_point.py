@@ -2,20 +2,23 @@
 (Gritz & Hahn's humanoid learned "pointing").
 
 Main goal: the angle between the shoulder→fingertip line and the target
-direction, averaged over the last third of the episode.  The direction is
+direction, averaged over the last third of the episode; a style term (phased
+in) asks for a straight arm, since a bent arm can "point" with its hand.  The direction is
 given as azimuth (degrees, 0 = straight ahead, positive to Herman's left)
 and elevation (degrees above the horizontal); the default points ahead and
 to the right at shoulder height.  Style points as every Herman arm task.
 """
 import numpy as np
 
+from gpmotion.sim import geometry3d
 from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, TERMINALS, goal_scene, site_at_rest,
-                                    style_measures, style_terms)
+from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, TERMINALS, VIEW, goal_scene, pose_q,
+                                    site_at_rest, style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
 
 AIMED = np.radians(8.0)     # "pointing at it"
+BENT = 0.2                  # ... with the arm at least 80 % extended (a point, not a salute)
 GOAL_REACH = 0.6            # m: the senses' goal lies this far along the direction from the shoulder
 
 
@@ -43,8 +46,18 @@ class HermanPoint(Task):
     view = VIEW
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
+             Term("bent", WEIGHT, phase=(0.2, 0.5),
+                  doc="mean 1 − shoulder–fingertip distance / straight-arm length, last third"),
              *style_terms(scale=WEIGHT))
-    success_threshold = f"mean pointing error over the last third below {np.degrees(AIMED):.0f}°"
+    success_threshold = (f"mean pointing error over the last third below {np.degrees(AIMED):.0f}°, "
+                         f"arm at least {100 * (1 - BENT):.0f} % extended")
+
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        f = self.fig
+        straight = geometry3d.sites_world(f, pose_q(f, elbow_r=0.0))
+        self.arm_length = float(np.linalg.norm(straight[f.site_names.index("fingertip_r")]
+                                               - straight[f.site_names.index("shoulder_r")]))
 
     def validate(self):
         if not -180.0 <= self.p["azimuth"] <= 180.0:
@@ -63,12 +76,14 @@ class HermanPoint(Task):
     def measure(self, traj):
         err = pointing_error(traj, self.target_dir)
         last = traj.times >= traj.times[-1] * 2.0 / 3.0
-        out = {"aim": err[:, last].mean(axis=1)}
+        reach = np.linalg.norm(traj.site("fingertip_r") - traj.site("shoulder_r"), axis=-1)
+        out = {"aim": err[:, last].mean(axis=1),
+               "bent": np.clip(1.0 - reach[:, last] / self.arm_length, 0.0, 1.0).mean(axis=1)}
         out.update(style_measures(traj))
         return out
 
     def success(self, traj, m):
-        return m["aim"] < AIMED
+        return (m["aim"] < AIMED) & (m["bent"] < BENT)
 
     def describe(self, traj, m):
         v = traj.site("fingertip_r")[0, -1] - traj.site("shoulder_r")[0, -1]

@@ -161,6 +161,13 @@ def test_point_main_term_follows_the_arm_direction(herman):
     assert m["aim"][0] < np.radians(1.0) and task.success(None, m)[0]
     hanging = task.measure(_still(herman, herman.q_default))["aim"][0]
     assert np.radians(80) < hanging < np.radians(100)   # the arm hangs: ~90° off a horizontal aim
+    assert m["bent"][0] < 0.1                            # 0.7 m of the 0.77 m arm
+    # the same direction with the hand only 0.3 m out: aimed, but not a point
+    angles, miss = reach(herman, "fingertip_r", shoulder + 0.3 * task.target_dir,
+                         x0=[-1.2, 0.0, -0.5, 2.0, 0.0, 0.0])
+    assert miss < 0.01
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["aim"][0] < np.radians(1.0) and m["bent"][0] > 0.5 and not task.success(None, m)[0]
 
 
 @pytest.mark.parametrize("target", [0, 1, 2])
