@@ -171,6 +171,12 @@ class Figure:
     spec: dict = field(default_factory=dict, repr=False)
 
     @property
+    def ground(self) -> dict:
+        """The ground this figure is made for (its spec's ``[ground]``:
+        make_scene's k_ground, c_ground, mu, k_tangent, c_tangent); {} = defaults."""
+        return dict(self.spec.get("ground", {}))
+
+    @property
     def nq(self) -> int:
         """Length of the configuration q (a 3-D free root has nq = nv + 1)."""
         if isinstance(self.model, Model3D):

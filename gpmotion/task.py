@@ -119,7 +119,7 @@ class Task:
         """Check parameter values; raise ValueError with one clear line."""
 
     def scene(self) -> Scene:
-        return make_scene()
+        return make_scene(**self.fig.ground)
 
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
         return self.fig.q_default.copy(), np.zeros(self.fig.nv)

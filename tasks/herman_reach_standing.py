@@ -6,7 +6,7 @@ start), on ``herman_standing``: the pelvis is a free root, so the arm's
 swing pushes the body, and the PD-held legs and trunk must absorb it.  One
 extra term, on from the start: ``balance``, the largest horizontal excursion
 of the pelvis from where it stood (m), plus 1 if it drops by more than
-20 cm (a fall).  The ground is stiff (the figure's intended scene).
+20 cm (a fall).  The ground is the figure's own (stiff: see its TOML).
 """
 import numpy as np
 
@@ -30,9 +30,9 @@ class HermanReachStanding(HermanTouchObject):
                          f"{STEADY * 100:.0f} cm of where it stood")
 
     def scene(self):
-        # herman_standing's intended ground (see its TOML): stiff enough for 70 kg
+        # herman_standing's own ground (its TOML's [ground]): stiff enough for 70 kg
         goal = self.object_position()
-        return make_scene(goal=tuple(float(v) for v in goal), k_ground=1e5, c_ground=400.0)
+        return make_scene(goal=tuple(float(v) for v in goal), **self.fig.ground)
 
     def measure(self, traj):
         out = super().measure(traj)

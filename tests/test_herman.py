@@ -92,13 +92,13 @@ def test_herman_standing_stands_for_5_s_at_the_default_step():
     from gpmotion.controllers import schedule
     fig = gpmotion.load_figure("herman_standing")
     assert fig.root == "free" and fig.nv == 35
-    # the scene its TOML names: 1e5 N/m per sole point resists tipping with
-    # k·Σx² ≈ 7300 N·m/rad, ten times m·g·h ≈ 690 (the default 5000 N/m: 370,
-    # it would tip over); 400 N·s/m damps the bounce on the soles (~11 /s)
-    k = 1e5
-    scene = gpmotion.make_scene(k_ground=k, c_ground=400.0)
-    tr = gpmotion.rollout(fig, scene, schedule.constant(fig.model.neutral), n_steps=5000,
-                          record_every=10)
+    # its own ground (the TOML's [ground]): 1e5 N/m per sole point resists
+    # tipping with k·Σx² ≈ 7300 N·m/rad, ten times m·g·h ≈ 690 (the default
+    # 5000 N/m: 370, it would tip over); 400 N·s/m damps the bounce (~11 /s)
+    assert fig.ground == {"k_ground": 1e5, "c_ground": 400.0}
+    k = fig.ground["k_ground"]
+    tr = gpmotion.simulate(fig, 5.0, record_every=10)             # simulate uses fig.ground
+    assert tr.scene.k_ground == k
     assert not tr.diverged[0]
     pelvis = tr.base()[0]                                          # (x, y, z, quaternion)
     assert np.abs(pelvis[:, :2] - pelvis[0, :2]).max() < 0.02      # within 2 cm horizontally

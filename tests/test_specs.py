@@ -130,3 +130,14 @@ def test_a_figure_variant_extends_a_shipped_one(tmp_path, monkeypatch):
     monkeypatch.setitem(figures._REGISTRY, "loop_b", {"extends": "loop_a"})
     with pytest.raises(SpecError, match="loop"):
         load_figure("loop_a")
+
+
+def test_a_figure_names_its_ground():
+    fig = load_figure({"extends": "lamp", "ground": {"k_ground": 2e4, "mu": 0.5}})
+    assert fig.ground == {"k_ground": 2e4, "mu": 0.5} and load_figure("lamp").ground == {}
+    tr = gpmotion.simulate(fig, 0.01)
+    assert tr.scene.k_ground == 2e4 and tr.scene.mu == 0.5
+    for bad, needle in (({"k_ground": -1.0}, "k_ground"), ({"stiffness": 1.0}, "unknown key"),
+                        ("soft", "table")):
+        with pytest.raises(SpecError, match=needle):
+            load_figure({"extends": "lamp", "ground": bad})

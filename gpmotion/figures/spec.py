@@ -46,6 +46,18 @@ def load_spec(path: str | Path) -> dict:
 
 
 NAMED_LISTS = ("bodies", "joints", "contacts", "sites")
+GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent")
+
+
+def check_ground(spec: dict) -> None:
+    """A spec's optional ``[ground]``: positive numbers for make_scene's ground keys."""
+    g = spec.get("ground", {})
+    if not isinstance(g, dict):
+        raise SpecError("ground: must be a table of " + ", ".join(GROUND_KEYS))
+    for k in g:
+        if k not in GROUND_KEYS:
+            raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS)}")
+        _num(g, k, "ground", positive=k != "mu", lo=0.0)
 
 
 def merge_spec(base: dict, over: dict) -> dict:
@@ -222,6 +234,7 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
         from .spec3d import compile_spec3d
         return compile_spec3d(spec, sense_ranges)
     name, raw_bodies, bodies = _name_and_bodies(spec, _body)
+    check_ground(spec)
     root = spec.get("root", {})
     rtype = root.get("type", "planar")
     if rtype not in ("planar", "fixed"):

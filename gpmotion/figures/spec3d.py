@@ -56,7 +56,7 @@ import math
 import numpy as np
 
 from ..model import FREE3D, HINGE3D, SLIDE3D, Figure, Model3D
-from .spec import PLANAR_AXIS, SpecError, _name_and_bodies, _num, _tree_order, _vec
+from .spec import PLANAR_AXIS, SpecError, _name_and_bodies, check_ground, _num, _tree_order, _vec
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -277,6 +277,7 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
     name, raw_bodies, bodies = _name_and_bodies(spec, _body3d)
+    check_ground(spec)
     root = spec.get("root", {})
     if not isinstance(root, dict):
         raise SpecError("root: must be a table")

@@ -238,6 +238,6 @@ def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene
         if figure.n_act == 0 or n.shape[-1] != figure.n_act:
             raise ValueError(f"targets: figure {figure.name!r} has {figure.n_act} actuators "
                              f"({', '.join(figure.actuator_names)})")
-    scene = scene or make_scene()
+    scene = scene or make_scene(**figure.ground)
     return rollout(figure, scene, ctrl, n_steps=max(1, int(round(seconds / dt))), q0=q0, qd0=qd0,
                    dt=dt, record_every=record_every, actuation=actuation, default_tau=default_tau)
