@@ -10,6 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..model import FREE3D, HINGE3D
+from .spatial3d import fixed_point_world, kinematics, point_world
 
 
 def quat_to_rot(qv: np.ndarray) -> np.ndarray:
@@ -66,102 +67,36 @@ def points_fast(model, q: np.ndarray, links, local) -> np.ndarray:
 
     Compiled (numba, parallel over frames) because the scores of a 3-D task
     ask for every recorded frame of every episode, and the numpy loop over
-    links cost more than the rollout itself; only the points are stored,
-    not every link frame.  ``points_world(model, *link_frames(model, q), ...)``
-    is its plain-numpy twin (tests compare them)."""
+    links cost more than the rollout itself; it runs the simulator's own
+    ``kinematics`` pass and stores only the points, not every link frame.
+    ``points_world(model, *link_frames(model, q), ...)`` is its plain-numpy
+    twin (tests compare them)."""
     q = np.asarray(q, dtype=np.float64)
-    flat = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+    flat = np.array(q.reshape(-1, q.shape[-1]))            # a copy: quaternions are normalized
+    for qa in model.qadr[model.jtype == FREE3D]:           # (as quat_to_rot does; kinematics
+        quat = flat[:, qa + 3:qa + 7]                      # assumes unit quaternions)
+        quat /= np.linalg.norm(quat, axis=1, keepdims=True)
     links = np.ascontiguousarray(links, dtype=np.int64)
     local = np.ascontiguousarray(np.asarray(local, dtype=np.float64).reshape(-1, 3))
     out = np.empty((flat.shape[0], len(links), 3))
-    _points_kernel(model.jtype, model.parent, model.qadr, model.axis, model.xrot, model.xpos,
-                   model.fixed_rot, model.fixed_pos, flat, links, local, out)
+    _points_kernel(model, flat, links, local, out)
     return out.reshape(q.shape[:-1] + (len(links), 3))
 
 
 @nb.njit(cache=True, parallel=True)
-def _points_kernel(jtype, parent, qadr, axis, xrot, xpos, fixed_rot, fixed_pos, q, links, local, out):
-    nl = parent.shape[0]
+def _points_kernel(M, q, links, local, out):
+    nl, nv = M.parent.shape[0], M.lo.shape[0]
     for s in nb.prange(q.shape[0]):
-        R = np.empty((nl + 1, 3, 3))            # index nl: the fixed root body
-        P = np.empty((nl + 1, 3))
-        R[nl] = fixed_rot
-        P[nl] = fixed_pos
-        _frames_one(jtype, parent, qadr, axis, xrot, xpos, q[s], R, P)
+        R, pos, E = np.empty((nl, 3, 3)), np.empty((nl, 3)), np.empty((nl, 3, 3))
+        r, v, cbias = np.empty((nl, 3)), np.empty((nl, 6)), np.empty((nl, 6))
+        kinematics(M, q[s], np.zeros(nv), R, pos, E, r, v, cbias)
         for k in range(links.shape[0]):
-            li = links[k] if links[k] >= 0 else nl
-            for a in range(3):
-                out[s, k, a] = P[li, a] + (R[li, a, 0] * local[k, 0] + R[li, a, 1] * local[k, 1]
-                                           + R[li, a, 2] * local[k, 2])
-
-
-@nb.njit(cache=True)
-def _frames_one(jtype, parent, qadr, axis, xrot, xpos, q, R, P):
-    """World rotation R[i] and origin P[i] of every link i for one configuration."""
-    A = np.empty((3, 3))              # the joint's own rotation (identity for a slide)
-    Rrel = np.empty((3, 3))
-    rrel = np.empty(3)
-    for i in range(parent.shape[0]):
-        qa, p = qadr[i], parent[i]
-        if jtype[i] == FREE3D:
-            _quat_rot(q[qa + 3], q[qa + 4], q[qa + 5], q[qa + 6], Rrel)
-            for a in range(3):
-                rrel[a] = q[qa + a]
-        else:
-            ax = axis[i]
-            if jtype[i] == HINGE3D:
-                _rodrigues(ax, q[qa], A)
-                for a in range(3):
-                    rrel[a] = xpos[i, a]
+            px, py, pz = local[k, 0], local[k, 1], local[k, 2]
+            if links[k] >= 0:
+                out[s, k, 0], out[s, k, 1], out[s, k, 2] = point_world(R, pos, links[k], px, py, pz)
             else:
-                for a in range(3):
-                    for b in range(3):
-                        A[a, b] = 1.0 if a == b else 0.0
-                for a in range(3):
-                    rrel[a] = xpos[i, a] + q[qa] * (xrot[i, a, 0] * ax[0] + xrot[i, a, 1] * ax[1]
-                                                    + xrot[i, a, 2] * ax[2])
-            for a in range(3):
-                for b in range(3):
-                    Rrel[a, b] = xrot[i, a, 0] * A[0, b] + xrot[i, a, 1] * A[1, b] + xrot[i, a, 2] * A[2, b]
-        if p >= 0 and jtype[i] != FREE3D:
-            for a in range(3):
-                P[i, a] = P[p, a] + R[p, a, 0] * rrel[0] + R[p, a, 1] * rrel[1] + R[p, a, 2] * rrel[2]
-                for b in range(3):
-                    R[i, a, b] = R[p, a, 0] * Rrel[0, b] + R[p, a, 1] * Rrel[1, b] + R[p, a, 2] * Rrel[2, b]
-        else:
-            for a in range(3):
-                P[i, a] = rrel[a]
-                for b in range(3):
-                    R[i, a, b] = Rrel[a, b]
-
-
-@nb.njit(cache=True)
-def _quat_rot(w, x, y, z, out):
-    n = np.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / n, x / n, y / n, z / n
-    out[0, 0] = 1 - 2 * (y * y + z * z)
-    out[0, 1] = 2 * (x * y - w * z)
-    out[0, 2] = 2 * (x * z + w * y)
-    out[1, 0] = 2 * (x * y + w * z)
-    out[1, 1] = 1 - 2 * (x * x + z * z)
-    out[1, 2] = 2 * (y * z - w * x)
-    out[2, 0] = 2 * (x * z - w * y)
-    out[2, 1] = 2 * (y * z + w * x)
-    out[2, 2] = 1 - 2 * (x * x + y * y)
-
-
-@nb.njit(cache=True)
-def _rodrigues(ax, angle, out):
-    c, sn = np.cos(angle), np.sin(angle)
-    for a in range(3):
-        for b in range(3):
-            out[a, b] = (1 - c) * ax[a] * ax[b] + (c if a == b else 0.0)
-    out[0, 1] -= sn * ax[2]
-    out[0, 2] += sn * ax[1]
-    out[1, 0] += sn * ax[2]
-    out[1, 2] -= sn * ax[0]
-    out[2, 0] -= sn * ax[1]
-    out[2, 1] += sn * ax[0]
+                out[s, k, 0], out[s, k, 1], out[s, k, 2] = fixed_point_world(
+                    M.fixed_rot, M.fixed_pos, px, py, pz)
 
 
 def link_poses(model, q: np.ndarray) -> np.ndarray:
