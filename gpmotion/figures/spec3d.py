@@ -222,12 +222,6 @@ def _joint3d(j, bodies, i):
 GIMBAL_MARGIN_DEG = 5.0
 
 
-def _rotate(v, axis, angle):
-    """Rodrigues: v rotated by ``angle`` about the unit ``axis``."""
-    c, s = math.cos(angle), math.sin(angle)
-    return v * c + np.cross(axis, v) * s + axis * float(axis @ v) * (1 - c)
-
-
 def _check_gimbal(axes, lims, where):
     """An Euler chain's intermediate links are massless, so the chain must
     never lose a rank: consecutive axes not parallel, and (3 axes) the first
@@ -240,13 +234,15 @@ def _check_gimbal(axes, lims, where):
             raise SpecError(f"{where}: axes {m + 1} and {m + 2} are (nearly) parallel; an euler "
                             f"joint needs a new direction at every axis")
     if len(axes) == 3:
-        lo, hi = lims[1]
-        for th in np.linspace(lo, hi, 721):
-            if abs(float(axes[0] @ _rotate(axes[2], axes[1], th))) > near:
-                raise SpecError(
-                    f"{where}: gimbal lock: axes 1 and 3 line up when the middle axis is at "
-                    f"{math.degrees(th):.0f}°; keep its limits at least {GIMBAL_MARGIN_DEG:.0f}° "
-                    f"away (e.g. within ±{90 - GIMBAL_MARGIN_DEG:.0f}° for \"zyx\")")
+        from ..sim.geometry3d import axis_angle
+        angles = np.linspace(*lims[1], 721)
+        lined_up = np.abs((axis_angle(axes[1], angles) @ axes[2]) @ axes[0]) > near
+        if lined_up.any():
+            th = angles[lined_up.argmax()]
+            raise SpecError(
+                f"{where}: gimbal lock: axes 1 and 3 line up when the middle axis is at "
+                f"{math.degrees(th):.0f}°; keep its limits at least {GIMBAL_MARGIN_DEG:.0f}° "
+                f"away (e.g. within ±{90 - GIMBAL_MARGIN_DEG:.0f}° for \"zyx\")")
 
 
 def _points3d(items, kind, bodies):
