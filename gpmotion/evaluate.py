@@ -49,7 +49,7 @@ class InProcessEvaluator:
         self._q0, self._qd0 = self.task.initial_state()
 
     def scene(self, progress: float = 1.0):
-        key = self.task.phase(progress)[len(self.task.terms):]
+        key = self.task.staged(progress)
         if key not in self._scenes:
             self._scenes[key] = self.task.scene_at(progress)
         return self._scenes[key]

@@ -177,9 +177,12 @@ class Task:
     def phase(self, progress: float) -> tuple:
         """Everything a cost depends on through progress: the terms' factors and
         the curriculum's values (the GP reuses a cost only within one phase)."""
-        return (tuple(float(t.factor(progress)) for t in self.terms)
-                + tuple(float(v) for k, v in sorted(self.params_at(progress).items())
-                        if k in self.curriculum))
+        return tuple(float(t.factor(progress)) for t in self.terms) + self.staged(progress)
+
+    def staged(self, progress: float) -> tuple:
+        """The curriculum's parameter values at run progress (sorted by name)."""
+        p = self.params_at(progress)
+        return tuple(float(p[k]) for k in sorted(self.curriculum))
 
     def score(self, traj, progress: float = 1.0):
         """(total cost per episode, {term: value}, success per episode)."""
