@@ -252,5 +252,6 @@ def task_names() -> list[str]:
 def get_task(name: str, **params) -> Task:
     _load_builtin()
     if name not in _TASKS:
-        raise KeyError(f"unknown task {name!r}; known: {', '.join(sorted(_TASKS))}")
+        from .names import unknown
+        raise KeyError(unknown("task", name, _TASKS))
     return _TASKS[name](**params)
