@@ -30,31 +30,20 @@ def _params(items):
 
 
 def _add_run_args(p):
-    p.add_argument("task", help="task name (gpmotion list tasks)")
+    from .cli_options import add_arguments
+    p.add_argument("task", help="task name (gpmotion list tasks; gpmotion show TASK)")
     p.add_argument("--controller", default="gp", help="gp | bsr-sense | bsr-time (default gp)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--seeds", type=int, default=1, help="independent runs with seeds seed..seed+K-1")
-    p.add_argument("--generations", type=int, help="GP generations / serial-search rounds")
-    p.add_argument("--population", type=int, help="GP population size")
-    p.add_argument("--selection", choices=["roulette", "tournament"],
-                   help="GP selection (default roulette, fitness-proportionate)")
-    p.add_argument("--p-crossover", type=float, help="GP crossover probability (default 0.9)")
-    p.add_argument("--p-mutation", type=float, help="GP mutation probability (default 0.02)")
-    p.add_argument("--p-creep", type=float,
-                   help="GP constant-creep probability: Gaussian steps on one tree's constants "
-                        "(default 0, herman tasks 0.1)")
-    p.add_argument("--islands", type=int,
-                   help="GP island model: demes that breed apart and pass their best around a "
-                        "ring every 5 generations (default 1)")
-    p.add_argument("--elitism", type=int, help="GP elites copied unchanged (default 1)")
-    p.add_argument("--max-size", type=int, help="GP nodes per tree cap (default 200)")
-    p.add_argument("--working", type=int, help="serial search: working controllers C (default 10)")
-    p.add_argument("--reseed-every", type=int, help="serial search: reseeding interval (default 200)")
-    p.add_argument("--rules", type=int, help="BSR rules per controller")
-    p.add_argument("--t-per", type=float, help="time-based BSR period (s; default: episode length)")
-    p.add_argument("--actuation", choices=["pd", "kinematic"], help="default: the family's own")
+    p.add_argument("--seeds", type=int, default=1,
+                   help="independent runs with seeds seed..seed+K-1; prints an aggregate at the end")
+    p.add_argument("--actuation", choices=["pd", "kinematic"],
+                   help="pd: targets drive PD servos (GP default); kinematic: joints follow "
+                        "targets with a time constant τ (BSR default)")
+    p.add_argument("--figure", metavar="VARIANT.toml",
+                   help="run the task on a figure variant (it must have the joints, sites, "
+                        "contacts and senses the task uses)")
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
-                   help="task parameter; VALUE may be a comma list to run a series")
+                   help="task parameter (gpmotion show TASK); VALUE may be a comma list to run a series")
     p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
     p.add_argument("--force", action="store_true", help="move an existing run directory aside")
     p.add_argument("--resume", action="store_true", help="continue an existing run directory")
@@ -65,6 +54,7 @@ def _add_run_args(p):
                    help="folder of extra primitives/tasks (repeatable)")
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
+    add_arguments(p)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -157,34 +147,26 @@ def cmd_list(args):
 
 
 def _run_configs(args):
+    from .cli_options import collect
+    from .families import FAMILIES
+    from .names import unknown
     from .records import validate_number
     from .run import RunConfig
+    if args.controller not in FAMILIES:
+        raise ValueError(unknown("controller", args.controller, FAMILIES))
     params = _params(args.param)
     series = {k: v.split(",") for k, v in params.items() if "," in v}
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
     validate_number("--seeds", args.seeds, lo=1, hi=10_000, integer=True)
-    for name, v, lo in (("--generations", args.generations, 1), ("--population", args.population, 2),
-                        ("--rules", args.rules, 1), ("--working", args.working, 2),
-                        ("--reseed-every", args.reseed_every, 1), ("--workers", args.workers, 0),
-                        ("--threads", args.threads, 1)):
-        validate_number(name, v, lo=lo, hi=10_000_000, integer=True, allow_none=True)
-    validate_number("--t-per", args.t_per, lo=1e-3, hi=1e3, allow_none=True)
-    validate_number("--p-crossover", args.p_crossover, lo=0, hi=1, allow_none=True)
-    validate_number("--p-mutation", args.p_mutation, lo=0, hi=1, allow_none=True)
-    validate_number("--p-creep", args.p_creep, lo=0, hi=1, allow_none=True)
-    validate_number("--islands", args.islands, lo=1, hi=10_000, integer=True, allow_none=True)
-    validate_number("--elitism", args.elitism, lo=0, hi=10**6, integer=True, allow_none=True)
-    validate_number("--max-size", args.max_size, lo=1, hi=512, integer=True, allow_none=True)
-    gp = args.controller == "gp"
-    search = ({"population": args.population, "generations": args.generations,
-               "selection": args.selection, "p_crossover": args.p_crossover,
-               "p_mutation": args.p_mutation, "p_creep": args.p_creep, "islands": args.islands,
-               "elitism": args.elitism,
-               "max_size": args.max_size} if gp else
-              {"n_working": args.working, "n_generations": args.generations,
-               "reseed_every": args.reseed_every})
-    fam = {} if gp else {"rules": args.rules, "t_per": args.t_per}
+    validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
+    validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
+    for d in args.plugins:          # before the options: --primitives may name a plugin's
+        from .plugins import load_folder
+        load_folder(d)
+    search, fam = collect(args, args.controller)
+    if args.figure:
+        params["figure"] = _figure_variant(args.task, args.figure)
     values = next(iter(series.values())) if series else [None]
     key = next(iter(series)) if series else None
     for seed in range(args.seed, args.seed + args.seeds):
@@ -194,11 +176,19 @@ def _run_configs(args):
                 p[key] = v
             name = _out_dir(args, seed, key, v)
             yield RunConfig(task=args.task, family=args.controller, seed=seed, params=p,
-                            family_options={k: v_ for k, v_ in fam.items() if v_ is not None},
-                            search={k: v_ for k, v_ in search.items() if v_ is not None},
+                            family_options=dict(fam), search=dict(search),
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
                             plugins=[str(Path(d).resolve()) for d in args.plugins]), name
+
+
+def _figure_variant(task_name, path):
+    """The variant's spec, resolved (``extends`` merged), as plain data: stored in the
+    run's parameters, so the run does not depend on the TOML file staying put."""
+    from .figures import load_spec, resolve_spec
+    if not Path(path).is_file():
+        raise ValueError(f"--figure: no such file {path}")
+    return resolve_spec(load_spec(path))
 
 
 def _out_dir(args, seed, key, value) -> Path:

@@ -91,6 +91,7 @@ class Task:
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
     def __init__(self, **overrides):
+        variant = overrides.pop("figure", None)   # a figure variant: name, TOML path or spec dict
         unknown = set(overrides) - set(self.params)
         if unknown:
             raise ValueError(f"task {self.name}: unknown parameter(s) {sorted(unknown)}; "
@@ -113,6 +114,27 @@ class Task:
             raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
         self.validate()
         self.fig: Figure = load_figure(self.figure)
+        if variant is not None:
+            self._use_variant(variant)
+
+    def _use_variant(self, spec) -> None:
+        """Run on a variant of the task's figure; it must have every actuated joint,
+        site, contact and terminal sense the task reads (checked by name)."""
+        fig = load_figure(spec)
+        base = self.fig
+        if fig.dimensions != base.dimensions:
+            raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D, "
+                             f"{base.name} is {base.dimensions}-D")
+        needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
+                 ("site", base.site_names, fig.site_names),
+                 ("contact", base.contact_names, fig.contact_names),
+                 ("sense", self.terminals or (), fig.sense_names))
+        missing = [f"{kind} {n!r}" for kind, names, have in needs for n in names if n not in have]
+        if missing:
+            raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "
+                             f"(the task uses them on {base.name})")
+        self.fig, self.figure = fig, fig.name
+        self.p["figure"] = spec
 
     # ---- things a task may override -------------------------------------
     def validate(self) -> None:
