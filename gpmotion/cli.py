@@ -1,4 +1,5 @@
-"""The ``gpmotion`` command: list, run, resume, replay, render, check, bench.
+"""The ``gpmotion`` command: list, show, run, resume, replay, render, compare, export,
+check, bench, help.
 
 Bad input (unknown task, malformed file, bad value, existing run directory)
 prints one line ``gpmotion: error: ...`` and exits with code 2.
@@ -9,13 +10,29 @@ import argparse
 import sys
 from pathlib import Path
 
-EPILOG = """examples:
+STYLE_HELP = """costs and phased style points:
+  A cost is lower-is-better: a main goal (e.g. metres from the target) plus
+  style terms (arrive early, don't fall, end neutral...).  As in Gritz & Hahn,
+  each style term phases in: its weight ramps from 0 to full over a window of
+  run progress (generation / generations), so the search first learns the
+  main goal.  While terms phase in, a generation's costs (best, median) are
+  under that generation's weights: "best" can rise although no controller got
+  worse, and "solved" counts the controllers passing the success test.  The
+  final best.json is re-scored with every term at full weight; `gpmotion
+  replay` shows each term's value, weight and phase.  `gpmotion show TASK`
+  lists a task's terms with their phase-in windows.
+"""
+
+EPILOG = STYLE_HELP + """
+examples:
   gpmotion run lamp_hop                         evolve a hopping lamp (GP, defaults)
   gpmotion run lamp_limbo --param pole_height=0.38,0.42,0.46
   gpmotion run starman_travel --controller bsr-time
   gpmotion replay runs/lamp_hop-gp-seed0        why the best controller scored as it did
   gpmotion render --figure lamp --seconds 2     a filmstrip of the lamp settling
   gpmotion list tasks
+  gpmotion show lamp_hop                        a task's parameters, terms, figure and senses
+  gpmotion help run                             every option of a command
 """
 
 
@@ -61,12 +78,23 @@ def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="registered tasks, figures, primitives, controller families")
+    from . import __version__
+    ap.add_argument("--version", action="version", version=f"gpmotion {__version__}")
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+    p = sub.add_parser("help", help="help on a command: gpmotion help run")
+    p.add_argument("topic", nargs="?", help="a command name")
+    p = sub.add_parser("list", help="registered tasks, figures, primitives, controller families "
+                       "(gpmotion show TASK for one task's details)")
     p.add_argument("what", nargs="?", default="all",
                    choices=["all", "tasks", "figures", "primitives", "controllers"])
     p.add_argument("--plugins", action="append", default=[], metavar="DIR")
-    _add_run_args(sub.add_parser("run", help="evolve a controller for a task"))
+    p = sub.add_parser("show", help="a task's parameters, terms (doc, weight, phase-in), figure, "
+                       "controlled joints, sites and senses")
+    p.add_argument("task")
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    _add_run_args(sub.add_parser("run", help="evolve a controller for a task",
+                                 description="Evolve a controller for a task.", epilog=STYLE_HELP,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
     p.add_argument("run_dir")
     p.add_argument("--quiet", action="store_true")
@@ -101,6 +129,8 @@ def parser() -> argparse.ArgumentParser:
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
     p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    p.add_argument("--only-plugins", action="store_true",
+                   help="check only what the --plugins folders add, not the built-ins")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
     return ap
 
@@ -110,18 +140,41 @@ def main(argv=None) -> int:
     if argv[:1] == ["bench"]:
         from .bench import main as bench_main
         return bench_main(argv[1:]) or 0
-    args = parser().parse_args(argv)
+    ap = parser()
+    if argv[:1] == ["help"]:
+        return _help(ap, argv[1:])
+    args = ap.parse_args(argv)
     try:
         return COMMANDS[args.cmd](args) or 0
     except KeyboardInterrupt as e:
         print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
         return 130
+    except BrokenPipeError:                 # `gpmotion show TASK | head`
+        sys.stderr.close()
+        return 0
     except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
         if type(e).__name__ == "WorkerLost":
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
         return 2
+
+
+def _help(ap, topic):
+    """``gpmotion help [COMMAND]``: the same text as ``gpmotion COMMAND --help``."""
+    if not topic:
+        ap.print_help()
+        return 0
+    if topic[0] == "bench":
+        from .bench import main as bench_main
+        return bench_main(["--help"]) or 0
+    subs = next(a for a in ap._actions if isinstance(a, argparse._SubParsersAction)).choices
+    if topic[0] not in subs:
+        from .names import unknown
+        print(f"gpmotion: error: {unknown('command', topic[0], subs)}", file=sys.stderr)
+        return 2
+    subs[topic[0]].print_help()
+    return 0
 
 
 def cmd_list(args):
@@ -144,6 +197,14 @@ def cmd_list(args):
         print("primitives:", ", ".join(f"{n}/{primitives.get(n).arity}" for n in primitives.names()))
     if args.what in ("all", "controllers"):
         print("controllers:", ", ".join(FAMILIES))
+
+
+def cmd_show(args):
+    from .plugins import load_folder
+    from .show import describe_task
+    for d in args.plugins:
+        load_folder(d)
+    print(describe_task(args.task))
 
 
 def _run_configs(args):
@@ -203,13 +264,32 @@ def _out_dir(args, seed, key, value) -> Path:
 
 def cmd_run(args):
     from .run import run
-    results = []
-    for cfg, out in _run_configs(args):
+    configs = list(_run_configs(args))        # every config validated before the first run
+    dirs = []
+    for cfg, out in configs:
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
                              artifacts=not args.no_artifacts)
-        results.append((out, cost, rd))
+        dirs.append(rd.path)
         _summary(rd)
+    if len(dirs) > 1:
+        print(_aggregate(dirs))
     return 0
+
+
+def _aggregate(dirs) -> str:
+    """One line over the finished runs: median [min, max] final cost, how many solved."""
+    import numpy as np
+
+    from .records import read_json
+    recs = [read_json(d / "best.json", kind="best") for d in dirs if (d / "best.json").exists()]
+    if not recs:
+        return f"{len(dirs)} runs: none finished"
+    costs = np.array([r["final_cost"] for r in recs])
+    solved = sum(bool(r["success"]) for r in recs)
+    return (f"{len(recs)} runs: final cost (every term at full weight) median "
+            f"{np.median(costs):.4f} [min {costs.min():.4f}, max {costs.max():.4f}]; "
+            f"solved {solved}/{len(recs)}"
+            + (f"; {len(dirs) - len(recs)} stopped before the end" if len(recs) < len(dirs) else ""))
 
 
 def _summary(rd):
@@ -332,13 +412,22 @@ def cmd_check(args):
     from .gp import primitives
     from .plugins import load_folder
     from .task import task_names
+    if args.only_plugins and not args.plugins:
+        raise ValueError("--only-plugins needs --plugins DIR")
+    primitives.load_builtin()
+    prims_before, tasks_before = set(primitives.names()), set(task_names())
     for d in args.plugins:
         load_folder(d)
-    primitives.load_builtin()
+    prims, tasks = primitives.names(), task_names()
+    if args.only_plugins:
+        prims = [n for n in prims if n not in prims_before]
+        tasks = [n for n in tasks if n not in tasks_before]
+        if not prims and not tasks:
+            raise ValueError(f"{', '.join(args.plugins)}: no primitives or tasks to check")
     bad = 0
-    for name in primitives.names():
+    for name in prims:
         bad += _report(f"primitive {name}", check_primitive, name)
-    for name in task_names():
+    for name in tasks:
         bad += _report(f"task {name}", check_task, name)
     return 1 if bad else 0
 
@@ -353,7 +442,7 @@ def _report(label, fn, arg):
         return 1
 
 
-COMMANDS = {"list": cmd_list, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
+COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
             "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export}
 
 if __name__ == "__main__":

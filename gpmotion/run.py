@@ -120,9 +120,15 @@ def _trim_log(run: RunDir, evaluations: int):
         atomic_write_text(run.log_path, buf.getvalue())
 
 
-def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
-        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None):
-    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir)."""
+def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = False,
+        resume: bool = False, quiet: bool = False, artifacts: bool = True,
+        max_generations: int | None = None):
+    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
+    ``out`` defaults to ``runs/TASK-FAMILY-seedN`` in the current folder (as `gpmotion run`)."""
+    if out is None:
+        if cfg is None:
+            raise ValueError("resume: give the run directory")
+        out = Path("runs") / f"{cfg.task}-{cfg.family}-seed{cfg.seed}"
     if resume:
         if not (Path(out) / RunDir.CONFIG).exists():
             raise ValueError(f"{out}: no config.json to resume from")

@@ -78,6 +78,8 @@ class Task:
     figure: ClassVar[str] = ""
     description: ClassVar[str] = ""
     params: ClassVar[dict] = {"seconds": 3.0}
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {}   # parameter -> (lo, hi), inclusive
+    param_docs: ClassVar[dict[str, str]] = {}            # parameter -> what it means (units)
     terms: ClassVar[tuple[Term, ...]] = ()
     terminals: ClassVar[tuple[str, ...] | None] = None   # None: every sense of the figure
     controlled: ClassVar[tuple[str, ...] | None] = None  # actuators the controller drives
@@ -110,6 +112,10 @@ class Task:
         for k in self.curriculum:
             if k not in self.params or isinstance(self.params[k], bool):
                 raise ValueError(f"task {self.name}: curriculum names {k!r}, not a numeric parameter")
+        for k, (lo, hi) in self.bounds.items():
+            if not lo <= float(self.p[k]) <= hi:
+                raise ValueError(f"task {self.name}: parameter {k} must be within {lo:g}..{hi:g}, "
+                                 f"got {self.p[k]:g}")
         if not 0 < float(self.p.get("seconds", 1.0)) <= 120:
             raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
         self.validate()
