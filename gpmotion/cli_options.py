@@ -110,7 +110,7 @@ OPTIONS: list[Option] = [
            "gpmotion list primitives)", "the GP function set",
            dict(type=str, metavar="NAME,..."), _primitives),
     Option("--erc-range", "family", {GP: "erc_range"},
-           "GP random constants are uniform in [LO, HI] (default -1,1)",
+           "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",
            "the range of GP random constants", dict(type=str, metavar="LO,HI"), _range),
     Option("--tau", "family", {GP: "tau"},
            "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
@@ -164,7 +164,10 @@ def add_arguments(parser) -> None:
     for o in OPTIONS:
         title = "options for --controller " + ", ".join(o.families())
         g = groups.get(title) or groups.setdefault(title, parser.add_argument_group(title))
-        g.add_argument(o.flag, dest=o.dest, default=None, help=o.help, **o.argparse)
+        kw = dict(o.argparse)
+        if "choices" not in kw:
+            kw.setdefault("metavar", {int: "N", float: "X"}.get(kw.get("type"), "VALUE"))
+        g.add_argument(o.flag, dest=o.dest, default=None, help=o.help, **kw)
 
 
 def collect(args, family: str) -> tuple[dict, dict]:
