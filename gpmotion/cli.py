@@ -87,17 +87,17 @@ def parser() -> argparse.ArgumentParser:
                        "(gpmotion show TASK for one task's details)")
     p.add_argument("what", nargs="?", default="all",
                    choices=["all", "tasks", "figures", "primitives", "controllers"])
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
     p = sub.add_parser("show", help="a task's parameters, terms (doc, weight, phase-in), figure, "
                        "controlled joints, sites and senses")
-    p.add_argument("task")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    p.add_argument("task", help="task name (gpmotion list tasks)")
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
     _add_run_args(sub.add_parser("run", help="evolve a controller for a task",
                                  description="Evolve a controller for a task.", epilog=STYLE_HELP,
                                  formatter_class=argparse.RawDescriptionHelpFormatter))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
-    p.add_argument("run_dir")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("run_dir", help="a run directory (runs/TASK-CONTROLLER-seedN)")
+    p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--out", help="also write filmstrip.png and motion.gif here")
@@ -105,30 +105,33 @@ def parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
-    p.add_argument("--seconds", type=float, default=2.0)
-    p.add_argument("-o", "--output", default="filmstrip.png")
+    p.add_argument("--seconds", type=float, default=2.0,
+                   help="simulated seconds for --figure (default 2)")
+    p.add_argument("-o", "--output", default="filmstrip.png", help="filmstrip PNG (default filmstrip.png)")
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
     p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
-    p.add_argument("task")
-    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time")
-    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("task", help="task name (gpmotion list tasks)")
+    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time",
+                   help="comma list of controller families (default gp,bsr-sense,bsr-time)")
+    p.add_argument("--seeds", type=int, default=5, help="runs per family, seeds 0..K-1 (default 5)")
     p.add_argument("--budget", type=int, default=5000, help="evaluations per run (default 5000)")
     p.add_argument("--actuation", choices=["pd", "kinematic"], default="pd",
                    help="one actuation for every family (default pd)")
-    p.add_argument("--population", type=int, default=100, help="GP population (default 100)")
-    p.add_argument("--param", action="append", metavar="KEY=VALUE")
-    p.add_argument("--workers", type=int, default=0)
-    p.add_argument("--scheduler")
+    p.add_argument("--population", type=int, help="GP population (default 100; needs gp in --controllers)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="task parameter (gpmotion show TASK)")
+    p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
+    p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
-    p.add_argument("--bvh", required=True, metavar="OUT.bvh")
+    p.add_argument("--bvh", required=True, metavar="OUT.bvh", help="the BVH file to write")
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
     p.add_argument("--only-plugins", action="store_true",
                    help="check only what the --plugins folders add, not the built-ins")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
@@ -385,10 +388,14 @@ def cmd_compare(args):
             raise ValueError(f"--controllers: unknown {c!r}; known: {', '.join(FAMILIES)}")
     validate_number("--seeds", args.seeds, lo=1, hi=1000, integer=True)
     validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
-    validate_number("--population", args.population, lo=2, hi=10**6, integer=True)
+    if args.population is not None and "gp" not in ctrls:
+        raise ValueError("--population does not apply: it is the GP population size and "
+                         "--controllers has no gp")
+    population = validate_number("--population", 100 if args.population is None else args.population,
+                                 lo=2, hi=10**6, integer=True)
     out = args.out or f"runs/compare-{args.task}"
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
-                       params=_params(args.param), population=args.population,
+                       params=_params(args.param), population=population,
                        workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
     print(md)
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")

@@ -212,3 +212,11 @@ def test_seeds_print_an_aggregate(tmp_path, capsys):
     assert line.startswith("2 runs: final cost") and "solved" in line
     med = sorted(finals)[0] / 2 + sorted(finals)[1] / 2
     assert f"median {med:.4f}" in line
+
+
+def test_compare_refuses_a_gp_option_without_gp(tmp_path, capsys):
+    out = tmp_path / "c"
+    assert main(["compare", "lamp_hop", "--controllers", "bsr-sense", "--population", "50",
+                 "--out", str(out)]) == 2
+    _one_line_error(capsys, "--population does not apply")
+    assert not out.exists()
