@@ -42,6 +42,8 @@ def _params(items):
         if "=" not in it:
             raise ValueError(f"--param expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
+        if k.strip() == "figure":
+            raise ValueError("--param figure=...: use --figure VARIANT.toml (stored with the run)")
         out[k.strip()] = v.strip()
     return out
 

@@ -36,5 +36,6 @@ def save_controller(path: str | Path, task: Task | str, genome, *, family: Famil
     rec = controller_record(cfg, task, fam, actuation, genome, costs[0])
     rec.update(terms=task.breakdown(measures, 0, 1.0), final_cost=float(costs[0]),
                success=bool(ok[0]), facts=task.describe(traj, measures))
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     atomic_write_json(path, envelope("best", rec))
     return rec
