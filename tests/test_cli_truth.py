@@ -220,3 +220,28 @@ def test_compare_refuses_a_gp_option_without_gp(tmp_path, capsys):
                  "--out", str(out)]) == 2
     _one_line_error(capsys, "--population does not apply")
     assert not out.exists()
+
+
+def _readme_commands():
+    import re
+    import shlex
+    from pathlib import Path
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    for block in re.findall(r"```\n(.*?)```", text, flags=re.S):
+        for line in block.splitlines():
+            line = line.split(" #")[0].strip()
+            if line.startswith("gpmotion ") and not line.startswith("gpmotion bench"):
+                yield shlex.split(line)[1:]
+
+
+def test_every_readme_command_parses_and_its_options_are_in_help():
+    cmds = list(_readme_commands())
+    assert len(cmds) >= 10
+    ap = parser()
+    subs = ap._subparsers._group_actions[0].choices
+    for argv in cmds:
+        ap.parse_args(argv)                                  # SystemExit on an unknown option
+        help_text = subs[argv[0]].format_help()
+        for tok in argv[1:]:
+            if tok.startswith("--"):
+                assert tok.split("=")[0] in help_text, (argv, tok)
