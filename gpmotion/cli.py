@@ -59,8 +59,8 @@ def _add_run_args(p):
                    help="pd: targets drive PD servos (GP default); kinematic: joints follow "
                         "targets with a time constant τ (BSR default)")
     p.add_argument("--figure", metavar="VARIANT.toml",
-                   help="run the task on a figure variant (it must have the joints, sites, "
-                        "contacts and senses the task uses)")
+                   help="run the task on a figure variant, a TOML file or a registered figure "
+                        "(it must have the joints, sites, contacts and senses the task uses)")
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
                    help="task parameter (gpmotion show TASK); VALUE may be a comma list to run a series")
     p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
@@ -252,10 +252,13 @@ def _run_configs(args):
 def _figure_variant(task_name, path):
     """The variant's spec, resolved (``extends`` merged), as plain data: stored in the
     run's parameters, so the run does not depend on the TOML file staying put."""
-    from .figures import load_spec, resolve_spec
-    if not Path(path).is_file():
-        raise ValueError(f"--figure: no such file {path}")
-    return resolve_spec(load_spec(path))
+    from .figures import figure_names, load_spec, resolve_spec
+    if Path(path).is_file():
+        return resolve_spec(load_spec(path))
+    if path in figure_names():                       # a registered figure, e.g. herman_standing
+        return resolve_spec({"extends": path})
+    from .names import did_you_mean
+    raise ValueError(f"--figure: no such file or figure {path!r}{did_you_mean(path, figure_names())}")
 
 
 def _out_dir(args, seed, key, value) -> Path:

@@ -40,6 +40,14 @@ def _wrap(label: str, names) -> str:
     return textwrap.fill(text, 96, initial_indent=f"{label}: ", subsequent_indent="  ")
 
 
+def _bsr_senses(fig) -> list[str]:
+    from .bsr.genome import table1_sense_indices
+    try:
+        return [fig.sense_names[i] for i in table1_sense_indices(fig.sense_names)]
+    except ValueError as e:           # a figure without com senses: say why
+        return [f"(none: {e})"]
+
+
 def describe_task(name: str) -> str:
     """A task's parameters, terms, figure, controlled joints, sites and senses."""
     task = get_task(name)
@@ -65,5 +73,6 @@ def describe_task(name: str) -> str:
         lines.append(_wrap("held at their neutral pose by PD", held))
     lines += [_wrap("sites", fig.site_names), _wrap("contacts", fig.contact_names),
               _wrap("GP terminals (senses)", task.terminal_names()),
+              _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
               f"GP search defaults: {gp_defaults or 'population 300, generations 40'}"]
     return "\n".join(lines)

@@ -128,9 +128,10 @@ class Task:
         site, contact and terminal sense the task reads (checked by name)."""
         fig = load_figure(spec)
         base = self.fig
-        if fig.dimensions != base.dimensions:
-            raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D, "
-                             f"{base.name} is {base.dimensions}-D")
+        if (fig.dimensions, fig.root) != (base.dimensions, base.root):
+            raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D with a "
+                             f"{fig.root} root; the task is written for {base.name}, "
+                             f"{base.dimensions}-D with a {base.root} root")
         needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
                  ("site", base.site_names, fig.site_names),
                  ("contact", base.contact_names, fig.contact_names),

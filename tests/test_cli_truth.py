@@ -245,3 +245,8 @@ def test_every_readme_command_parses_and_its_options_are_in_help():
         for tok in argv[1:]:
             if tok.startswith("--"):
                 assert tok.split("=")[0] in help_text, (argv, tok)
+
+
+def test_a_variant_with_another_root_is_refused(capsys):
+    assert main(["run", "herman_touch_object", "--figure", "herman_standing"]) == 2
+    _one_line_error(capsys, "free root", "fixed root")

@@ -90,7 +90,8 @@ class Trajectory:
 
     def __repr__(self) -> str:        # not the arrays (tens of kB)
         div = int(self.diverged.sum())
-        return (f"Trajectory({self.figure.name!r}, {self.n_episodes} episodes × "
+        n = self.n_episodes
+        return (f"Trajectory({self.figure.name!r}, {n} episode{'s' * (n != 1)} × "
                 f"{len(self.times)} frames every {self.dt * self.record_every * 1e3:g} ms, "
                 f"{self.times[-1] if len(self.times) else 0:g} s, q {self.q.shape[2]}"
                 f"{', senses' if self.senses is not None else ''}"
