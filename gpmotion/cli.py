@@ -107,8 +107,8 @@ def parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
-    p.add_argument("--seconds", type=float, default=2.0,
-                   help="simulated seconds for --figure (default 2)")
+    p.add_argument("--seconds", type=float,
+                   help="simulated seconds for --figure (default 2; a controller runs its task's episode)")
     p.add_argument("-o", "--output", default="filmstrip.png", help="filmstrip PNG (default filmstrip.png)")
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
@@ -361,12 +361,16 @@ def cmd_render(args):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
     if args.figure and args.trees:
         raise ValueError("--trees needs a GP controller, not --figure")
+    if args.source and args.seconds is not None:
+        raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
+                         "(the task's 'seconds' parameter)")
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
-        validate_number("--seconds", args.seconds, lo=0.01, hi=120)
+        seconds = validate_number("--seconds", 2.0 if args.seconds is None else args.seconds,
+                                  lo=0.01, hi=120)
         fig = load_figure(args.figure)
-        traj = simulate(fig, args.seconds)
+        traj = simulate(fig, seconds)
         title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from .replay import load_controller, replay_genome

@@ -250,3 +250,9 @@ def test_every_readme_command_parses_and_its_options_are_in_help():
 def test_a_variant_with_another_root_is_refused(capsys):
     assert main(["run", "herman_touch_object", "--figure", "herman_standing"]) == 2
     _one_line_error(capsys, "free root", "fixed root")
+
+
+def test_render_refuses_seconds_for_a_controller(tmp_path, capsys):
+    (tmp_path / "best.json").write_text("{}")
+    assert main(["render", str(tmp_path), "--seconds", "5", "-o", str(tmp_path / "x.png")]) == 2
+    _one_line_error(capsys, "--seconds applies to --figure")
