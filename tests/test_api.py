@@ -4,6 +4,7 @@ import inspect
 import json
 import random
 import re
+import sys
 from pathlib import Path
 
 import pytest
@@ -31,6 +32,21 @@ def test_check_primitive_has_a_real_signature():
     assert "task" in inspect.signature(gpmotion.check_task).parameters
 
 
+@pytest.fixture
+def forget_plugins():
+    """Unregister the primitives a test's plugin folder adds: the default GP
+    function set is every registered primitive, so later tests must not see them."""
+    from gpmotion.gp import primitives
+    primitives.load_builtin()                   # built-ins stay registered
+    before, mods = set(primitives.names()), set(sys.modules)
+    yield
+    for name in set(primitives.names()) - before:
+        primitives.unregister(name)
+    for m in set(sys.modules) - mods:
+        if m.startswith("gpmotion_plugin_"):
+            del sys.modules[m]
+
+
 PLUGIN = '''import math
 from gpmotion import primitive
 
@@ -41,7 +57,7 @@ def hypot_api(a, b):
 '''
 
 
-def test_check_primitive_of_a_plugin(tmp_path):
+def test_check_primitive_of_a_plugin(tmp_path, forget_plugins):
     with pytest.raises(ValueError, match=r"unknown primitive 'hypot_api'.*load_plugins"):
         gpmotion.check_primitive("hypot_api")
     (tmp_path / "hyp.py").write_text(PLUGIN)
