@@ -314,8 +314,20 @@ def _summary(rd):
 
 def cmd_resume(args):
     from .run import run
+    _refuse_series(Path(args.run_dir))
     best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet)
     _summary(rd)
+
+
+def _refuse_series(path: Path):
+    """A series folder (--seeds K, --param k=a,b) holds runs, not a config: name them."""
+    if (path / "config.json").exists() or not path.is_dir():
+        return
+    runs = sorted(str(c.parent) for c in path.glob("**/config.json"))
+    if runs:
+        more = f" (and {len(runs) - 3} more)" if len(runs) > 3 else ""
+        raise ValueError(f"{path} is a series of {len(runs)} runs; resume each: "
+                         + ", ".join(f"gpmotion resume {r}" for r in runs[:3]) + more)
 
 
 def cmd_replay(args):

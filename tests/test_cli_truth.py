@@ -271,3 +271,11 @@ def test_render_refuses_seconds_for_a_controller(tmp_path, capsys):
     (tmp_path / "best.json").write_text("{}")
     assert main(["render", str(tmp_path), "--seconds", "5", "-o", str(tmp_path / "x.png")]) == 2
     _one_line_error(capsys, "--seconds applies to --figure")
+
+
+def test_resume_of_a_series_folder_names_its_runs(tmp_path, capsys):
+    for k in (0, 1):
+        (tmp_path / "s" / f"seed{k}").mkdir(parents=True)
+        (tmp_path / "s" / f"seed{k}" / "config.json").write_text("{}")
+    assert main(["resume", str(tmp_path / "s")]) == 2
+    _one_line_error(capsys, "series of 2 runs", f"gpmotion resume {tmp_path / 's' / 'seed1'}")
