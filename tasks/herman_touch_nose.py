@@ -32,6 +32,7 @@ class HermanTouchNose(Task):
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = "nose at rest"    # pictures: the scene goal, captioned
     terms = (Term("nose", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–nose distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              *style_terms())
