@@ -26,7 +26,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(d[::2], d[1::2]))
 
 
-def flight_events(times, height, airborne, min_flight: float = 0.03) -> list[tuple[int, str]]:
+def flight_events(times, height, airborne, min_flight: float = 0.06) -> list[tuple[int, str]]:
     """``[(frame, label)]`` sorted by frame: "take-off" (first frame off the
     ground), "apex" (highest centre of mass in the air) and "landing" (first
     frame back on the ground) of every flight phase.
@@ -35,8 +35,8 @@ def flight_events(times, height, airborne, min_flight: float = 0.03) -> list[tup
     (a recorded episode's event channels hold the max since the previous
     frame); frame 0 closes no interval, so it takes frame 1's value.  A
     flight phase is a run of airborne frames that starts after a frame on
-    the ground and lasts at least ``min_flight`` seconds (shorter ones are
-    contact chatter).  A figure airborne from the first frame (dropped, or
+    the ground and lasts at least ``min_flight`` seconds (shorter ones, with
+    an apex under ~5 mm, are bounces and contact chatter).  A figure airborne from the first frame (dropped, or
     never touching the ground, e.g. a fixed-root figure) has no take-off,
     hence no flight: only its landing, if it lands after ``min_flight``, is
     an event.
@@ -69,11 +69,27 @@ def flight_events(times, height, airborne, min_flight: float = 0.03) -> list[tup
     return events
 
 
+def crossing_events(times, x, marks: list[tuple[float, str]]) -> list[tuple[int, str]]:
+    """``[(frame, label)]``: the first frame at which ``x`` (e.g. the centre
+    of mass) reaches each mark (e.g. a limbo pole's x), when it starts short
+    of it; moving left, when it starts beyond it."""
+    x = np.asarray(x, float).reshape(-1)
+    out = []
+    for at, label in marks:
+        side = np.sign(x - at)
+        if not np.isfinite(x[0]) or side[0] == 0:
+            continue
+        crossed = np.flatnonzero(np.isfinite(x) & (side != side[0]))
+        if crossed.size:
+            out.append((int(crossed[0]), label))
+    return out
+
+
 def choose_frames(ok: np.ndarray, times, n: int,
                   events: list[tuple[int, str]] | None = None) -> np.ndarray:
     """At most ``n`` frames of ``ok`` (the drawable ones), sorted: the first
-    and last, the ``events`` frames (apexes first, then take-offs and
-    landings, in time order, as many as fit), then fill-ins, each the frame
+    and last, the ``events`` frames (apexes and pole passages first, then
+    take-offs, landings and others, in time order, as many as fit), then fill-ins, each the frame
     farthest in time from every frame already chosen."""
     if n < 1:
         raise ValueError(f"need at least one frame to draw, got {n}")
@@ -82,7 +98,7 @@ def choose_frames(ok: np.ndarray, times, n: int,
     if ok.size <= n:
         return ok
     okset = set(ok.tolist())
-    rank = {"apex": 0, "take-off": 1, "landing": 1}
+    rank = {"apex": 0, "under the pole": 0, "take-off": 1, "landing": 1}
     wanted = [ok[0], ok[-1]] + [i for i, lab in sorted(events or [], key=lambda ev: rank.get(ev[1], 2))
                                 if i in okset]
     chosen: list[int] = []
@@ -112,7 +128,9 @@ def gif_timing(ok: np.ndarray, times, speed: float = 1.0, max_fps: float = 25.0,
     The frames are every k-th recorded one, k the smallest stride that keeps
     the playback rate ≤ ``max_fps`` and the count ≤ ``max_frames``,
     preferring (up to doubling k) a stride whose delay is a whole number of
-    centiseconds, so every frame lasts the same.  Frame j is shown from its
+    centiseconds, so every frame lasts the same; frames of ``times`` not in
+    ``ok`` (not drawable) are skipped, their time held by the frame shown
+    before them.  Frame j is shown from its
     own time to the next shown frame's (the last one for one stride), the
     boundaries rounded to 10 ms on the cumulative clock: the total is the
     shown span plus one stride, over ``speed``, with no drift.
@@ -136,9 +154,12 @@ def gif_timing(ok: np.ndarray, times, speed: float = 1.0, max_fps: float = 25.0,
     exact = [j for j in range(k, 2 * k + 1) if abs(j * play / GIF_TICK - round(j * play / GIF_TICK)) < 1e-6]
     if exact and math.ceil(span / exact[0]) <= max_frames:
         k = exact[0]
-    slot = np.floor((t[ok] - t[ok[0]]) / (k * step) + 1e-6).astype(int)
-    _, first = np.unique(slot, return_index=True)
-    shown = ok[first]
+    shown, due = [], -np.inf
+    for i in ok:                     # every k-th; after a gap, k steps on from the last shown
+        if t[i] >= due:
+            shown.append(i)
+            due = t[i] + (k - 1e-6) * step
+    shown = np.array(shown)
     start = (t[shown] - t[shown[0]]) * 1000.0 / speed
     ends = np.append(start[1:], start[-1] + k * play)
     ticks = np.round(np.append(start[:1], ends) / GIF_TICK).astype(int)

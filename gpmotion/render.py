@@ -113,10 +113,10 @@ def _draw_scene(ax, lo, hi, poles, ground_z, goal, small=False, goal_label=None)
     if poles is not None:
         for x, z, r in poles:
             # the bar runs along y (into the page): its end-on section, and
-            # the post it rests on, behind the figure
+            # the post it rests on (at its end, behind the figure: dashed)
             base = ground_z if ground_z is not None else lo[1]
-            ax.plot([x, x], [base, z], color="0.55", lw=1.0 if small else 2.0, zorder=1.5,
-                    solid_capstyle="butt")
+            ax.plot([x, x], [base, z], color="0.6", lw=0.8 if small else 1.5, ls=(0, (4, 3)),
+                    zorder=1.5)
             ax.add_patch(Circle((x, z), r, color="tab:red", alpha=0.9, zorder=2))
             if not small:
                 ax.annotate(pole_text((x, z, r), ground_z), (x + r, z), xytext=(6, 4),
@@ -125,8 +125,8 @@ def _draw_scene(ax, lo, hi, poles, ground_z, goal, small=False, goal_label=None)
         ax.plot([goal[0]], [goal[1]], marker="*", ms=7 if small else 14,
                 color="gold", mec="k", mew=0.6, zorder=5, ls="none")
         if goal_label and not small:
-            ax.annotate(goal_label, (goal[0], goal[1]), xytext=(0, 9), textcoords="offset points",
-                        ha="center", fontsize=8, zorder=6)
+            ax.annotate(goal_label, (goal[0], goal[1]), xytext=(0, -9), textcoords="offset points",
+                        ha="center", va="top", fontsize=8, zorder=6)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal", adjustable="box")

@@ -25,6 +25,7 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.gridspec import GridSpec
+from matplotlib.ticker import MaxNLocator, NullFormatter
 from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 from PIL import Image
@@ -32,7 +33,7 @@ from PIL import Image
 from gpmotion.records import atomic_output
 
 GRID = 0.25          # ground grid spacing (m)
-from .frames import choose_frames, event_labels, flight_events, gif_timing, speed_text  # noqa: E402
+from .frames import choose_frames, crossing_events, event_labels, flight_events, gif_timing, speed_text  # noqa: E402
 from .render import _check_motion, pole_text, save_gif  # noqa: E402  (shared with the planar renderer)
 
 _MAX_GRID_LINES = 40
@@ -104,15 +105,15 @@ def _setup(ax, lo, hi, elev, azim, small=False):
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(tuple(hi - lo), zoom=1.3 if small else 1.0)
+    ax.set_box_aspect(tuple(hi - lo), zoom=1.3 if small else 0.85)   # room for tick labels
     ax.view_init(elev=elev, azim=azim)
     ax.computed_zorder = False          # draw order: ground, then older → newer frames
     if small:
         ax.set_axis_off()
     else:
         for lab, setter in (("x (m)", ax.set_xlabel), ("y (m)", ax.set_ylabel), ("z (m)", ax.set_zlabel)):
-            setter(lab, fontsize=8, labelpad=-2)
-        ax.tick_params(labelsize=7, pad=0)
+            setter(lab, fontsize=8, labelpad=12)
+        ax.tick_params(labelsize=7, pad=4)
         for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
             axis.pane.set_alpha(0.15)
 
@@ -175,6 +176,26 @@ def _points_per_metre(ax, lo, hi) -> float:
     c0 = disp(c)
     px = max(np.hypot(*(disp(c + d * e) - c0)) for e in np.eye(3)) / d
     return float(px * 72.0 / fig.dpi)
+
+
+def _fit_ticks(ax, lo, hi, spacing: float = 45.0) -> None:
+    """Tick labels that do not overlap (call once the axes are laid out):
+    about one tick per ``spacing`` points of each axis's projected length;
+    an axis seen nearly end-on keeps two grid lines and no numbers."""
+    M = ax.get_proj()
+
+    def disp(p):
+        x, y, _ = proj3d.proj_transform(p[0], p[1], p[2], M)
+        return ax.transData.transform((x, y))
+
+    for i, axis in enumerate((ax.xaxis, ax.yaxis, ax.zaxis)):
+        end = np.array(lo, float)
+        end[i] = hi[i]
+        points = np.hypot(*(disp(end) - disp(lo))) * 72.0 / ax.figure.dpi
+        n = int(points // spacing)
+        axis.set_major_locator(MaxNLocator(nbins=max(n, 2)))
+        if n < 2:
+            axis.set_major_formatter(NullFormatter())
 
 
 def _body_style(rad, ppm):
@@ -257,6 +278,7 @@ def filmstrip3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_l
     cmap = colormaps["Blues"]
     colors = [cmap(v) for v in np.linspace(0.35, 1.0, n)]
     ppm = _points_per_metre(ax, lo, hi)
+    _fit_ticks(ax, lo, hi)
     _ground(ax, lo, hi, ground_z)
     _markers(ax, lo, hi, goal, targets, poles, ppm, ground_z=ground_z, goal_label=goal_label)
     for i, c in zip(frames, colors):
@@ -299,6 +321,7 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_lab
         fig.suptitle(title, fontsize=10)
     fig.canvas.draw()
     ppm = _points_per_metre(ax, lo, hi)
+    _fit_ticks(ax, lo, hi)
     _ground(ax, lo, hi, ground_z)
     _markers(ax, lo, hi, goal, targets, poles, ppm, ground_z=ground_z, goal_label=goal_label)
     lines, dots = _draw_figure(ax, seg[frames[0]], rad, colormaps["Blues"](0.85), ppm)
@@ -321,14 +344,17 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_lab
 # ------------------------------------------------------------- dispatcher
 
 def motion_events(traj, e: int = 0) -> list[tuple[int, str]]:
-    """Take-off, apex and landing frames of episode ``e``: airborne = no
+    """Take-off, apex and landing frames of episode ``e`` (airborne = no
     ground contact force at any contact point over a frame's interval,
-    height = the centre of mass's (:func:`gpmotion.frames.flight_events`)."""
+    height = the centre of mass's; :func:`gpmotion.frames.flight_events`)
+    and the frames where the centre of mass passes under each limbo pole."""
     cf = traj.contact_force[e]
-    if not traj.scene.ground or cf.shape[-1] == 0:
-        return []
-    height = traj.com[e][:, 2 if traj.is3d else 1]
-    return flight_events(traj.times, height, cf.max(axis=1) == 0)
+    poles = [(float(x), "under the pole") for x in traj.scene.poles[:, 0]]
+    events = crossing_events(traj.times, traj.com[e][:, 0], poles)
+    if traj.scene.ground and cf.shape[-1]:
+        height = traj.com[e][:, 2 if traj.is3d else 1]
+        events += flight_events(traj.times, height, cf.max(axis=1) == 0)
+    return sorted(events)
 
 
 def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=None,
