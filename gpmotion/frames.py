@@ -88,8 +88,8 @@ def crossing_events(times, x, marks: list[tuple[float, str]]) -> list[tuple[int,
 def choose_frames(ok: np.ndarray, times, n: int,
                   events: list[tuple[int, str]] | None = None) -> np.ndarray:
     """At most ``n`` frames of ``ok`` (the drawable ones), sorted: the first
-    and last, the ``events`` frames (apexes and pole passages first, then
-    take-offs, landings and others, in time order, as many as fit), then fill-ins, each the frame
+    and last, the ``events`` frames (take-offs and landings after the
+    others, e.g. apexes, in time order, as many as fit), then fill-ins, each the frame
     farthest in time from every frame already chosen."""
     if n < 1:
         raise ValueError(f"need at least one frame to draw, got {n}")
@@ -98,8 +98,8 @@ def choose_frames(ok: np.ndarray, times, n: int,
     if ok.size <= n:
         return ok
     okset = set(ok.tolist())
-    rank = {"apex": 0, "under the pole": 0, "take-off": 1, "landing": 1}
-    wanted = [ok[0], ok[-1]] + [i for i, lab in sorted(events or [], key=lambda ev: rank.get(ev[1], 2))
+    rank = {"take-off": 1, "landing": 1}     # after apexes, pole passages, a task's own moments
+    wanted = [ok[0], ok[-1]] + [i for i, lab in sorted(events or [], key=lambda ev: rank.get(ev[1], 0))
                                 if i in okset]
     chosen: list[int] = []
     for i in wanted:

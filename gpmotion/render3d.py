@@ -156,9 +156,10 @@ def _markers(ax, lo, hi, goal, targets, poles, ppm, small=False, ground_z=None,
                 ms=4 if small else 8, color="tab:red", mec="k", mew=0.6)
     if goal is not None:
         ax.plot([goal[0]], [goal[1]], [goal[2]], ls="none", marker="*",
-                ms=7 if small else 14, color="gold", mec="k", mew=0.6)
-        if goal_label and not small:
-            ax.text(goal[0], goal[1], goal[2], "   " + goal_label, fontsize=8, va="center")
+                ms=7 if small else 14, color="gold", mec="k", mew=0.6, zorder=9)
+        if goal_label and not small:           # above the figure, on a pale ground
+            ax.text(goal[0], goal[1], goal[2], "   " + goal_label, fontsize=8, va="center",
+                    zorder=10, bbox=dict(fc="white", ec="none", alpha=0.7, pad=1))
 
 
 def _points_per_metre(ax, lo, hi) -> float:
@@ -366,7 +367,8 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=N
     is drawn only when ``task`` names it (its ``goal_label``, e.g.
     "target"): a passive figure's scene has a placeholder goal at the origin
     that means nothing.  Filmstrip frames include the motion's take-offs,
-    apexes and landings (:func:`motion_events`).  The GIF plays at ``speed``
+    apexes, landings and pole passages (:func:`motion_events`) and the
+    task's ``picture_events(traj, e)`` (``[(frame, word)]``) if it has them.  The GIF plays at ``speed``
     × real time.  ``targets`` (3-D only): extra points ``[n, 3]`` to mark.
     ``view`` (3-D only; default: the task's ``view``): camera
     ``elev``/``azim``, ``bodies`` to draw (a close-up: the axis limits follow
@@ -382,6 +384,8 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=N
     ground_z = sc.ground_z if sc.ground else None
     goal_label = getattr(task, "goal_label", None)
     events = motion_events(traj, e)
+    if hasattr(task, "picture_events"):        # a task's own moments, e.g. "touch"
+        events = sorted(events + list(task.picture_events(traj, e)))
     if isinstance(traj.figure.model, Model):
         from . import render
         kw = dict(poles=poles, ground_z=ground_z, title=title, goal_label=goal_label,

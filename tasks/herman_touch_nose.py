@@ -53,6 +53,11 @@ class HermanTouchNose(Task):
     def success(self, traj, m):
         return m["nose_end"] < TOUCH
 
+    def picture_events(self, traj, e=0):
+        """Filmstrip frames to keep: the first touch."""
+        near = fingertip_distance(traj, "nose")[e] < TOUCH
+        return [(int(near.argmax()), "first touch")] if near.any() else []
+
     def describe(self, traj, m):
         d = fingertip_distance(traj, "nose")[0]
         near = d < TOUCH

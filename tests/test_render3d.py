@@ -226,3 +226,13 @@ def test_animate3d_plays_in_real_time(tmp_path):
     with Image.open(tmp_path / "w.gif") as im:
         d = [f.info["duration"] for f in ImageSequence.Iterator(im)]
     assert set(d) == {100} and 1500 <= sum(d) <= 1600
+
+
+def test_a_task_adds_its_own_moments_to_the_filmstrip(monkeypatch, tmp_path):
+    task = gpmotion.get_task("herman_touch_nose")
+    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    seen = {}
+    monkeypatch.setattr(render3d, "filmstrip3d", lambda *a, **kw: seen.update(kw))
+    monkeypatch.setattr(task, "picture_events", lambda traj, e: [(3, "first touch")], raising=False)
+    render3d.render_any(traj, tmp_path / "f.png", task=task)
+    assert (3, "first touch") in seen["events"]
