@@ -51,10 +51,10 @@ HOP_TERMS = (
 class LampHop(Task):
     name = "lamp_hop"
     figure = "lamp"
+    goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target point on the floor"
     params = {"distance": 0.4, "seconds": 3.0}
     terms = HOP_TERMS
-    goal_label = "target"          # pictures: the scene goal, captioned
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
 
     def validate(self):
