@@ -7,6 +7,11 @@ Segments are ``float[F, n_seg, 2, 2]`` — frame, segment, endpoint (a, b),
 so limbs have their true thickness at any zoom (a line width in points would
 not).
 
+GIFs play in real time unless asked otherwise, and say their speed;
+filmstrips keep the motion's events (take-off, apex, landing, ...) besides
+evenly spaced frames (:mod:`gpmotion.frames`).  :func:`run_curve` draws a
+run's curve.png with its phase-in windows.
+
 Uses matplotlib's object API with an Agg canvas — no pyplot, no global
 backend switch, no screen.  Every output goes to a temp file beside the
 target and is moved into place only when complete

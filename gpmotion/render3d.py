@@ -13,9 +13,12 @@ frame of a picture uses the same axis limits, taken from the whole motion,
 at equal scale on x, y and z (``set_box_aspect``).  The ground is a grid of
 lines every 0.25 m on z = ``ground_z`` (wider spacing on very large scenes,
 at most ~40 lines a side).  Limbo poles (x, z, radius) are horizontal bars
-along y, the goal is a gold star, ``targets`` (points, e.g. the object to
-touch) red dots.  Object API with an Agg canvas (no pyplot, no screen);
-outputs are written atomically (:func:`gpmotion.records.atomic_output`).
+along y on two posts, labelled with the height of their underside; the goal
+is a gold star (``goal_label`` captions it; :func:`render_any` draws it only
+for a task that names it); ``targets`` (points, e.g. the object to touch) are
+red dots.  Frames and GIF timing as in :mod:`gpmotion.render`
+(:mod:`gpmotion.frames`).  Object API with an Agg canvas (no pyplot, no
+screen); outputs are written atomically (:func:`gpmotion.records.atomic_output`).
 Frames containing NaN/inf are skipped; no usable frame is a ValueError.
 """
 from __future__ import annotations
@@ -33,7 +36,8 @@ from PIL import Image
 from gpmotion.records import atomic_output
 
 GRID = 0.25          # ground grid spacing (m)
-from .frames import choose_frames, crossing_events, event_labels, flight_events, gif_timing, speed_text  # noqa: E402
+from .frames import (choose_frames, crossing_events, event_labels, flight_events,  # noqa: E402
+                     gif_timing, speed_text)
 from .render import _check_motion, pole_text, save_gif  # noqa: E402  (shared with the planar renderer)
 
 _MAX_GRID_LINES = 40
