@@ -61,10 +61,33 @@ def _add_run_args(p):
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--threads", type=int, help="numba threads in this process")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
-                   help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
+    _add_tls_args(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
+
+
+def _add_plugins_arg(p):
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
+                   help="folder of extra primitives/tasks/figures (repeatable); the only way, "
+                        "besides installed entry points, that gpmotion runs code not its own")
+
+
+def _add_tls_args(p):
+    p.add_argument("--tls-ca-file", metavar="PEM", help="Dask TLS: CA certificate (tls:// scheduler)")
+    p.add_argument("--tls-cert", metavar="PEM", help="Dask TLS: this client's certificate")
+    p.add_argument("--tls-key", metavar="PEM", help="Dask TLS: this client's private key")
+
+
+def _backend(args) -> dict:
+    """This invocation's evaluator settings (TLS files), never recorded in the run."""
+    return {k: getattr(args, k) for k in ("tls_ca_file", "tls_cert", "tls_key")
+            if getattr(args, k, None)}
+
+
+def _activate_plugins(args) -> list:
+    from .plugins import activate
+    return activate(getattr(args, "plugins", []) or [])
 
 
 def parser() -> argparse.ArgumentParser:
@@ -75,15 +98,20 @@ def parser() -> argparse.ArgumentParser:
     p = sub.add_parser("list", help="registered tasks, figures, primitives, controller families")
     p.add_argument("what", nargs="?", default="all",
                    choices=["all", "tasks", "figures", "primitives", "controllers"])
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    _add_plugins_arg(p)
     _add_run_args(sub.add_parser("run", help="evolve a controller for a task"))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
     p.add_argument("run_dir")
     p.add_argument("--quiet", action="store_true")
+    p.add_argument("--workers", type=int, help="resume on a process pool (replaces the recorded backend)")
+    p.add_argument("--scheduler", help="resume on Dask: 'local' or tcp://HOST:PORT (replaces it too)")
+    _add_tls_args(p)
+    _add_plugins_arg(p)
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--out", help="also write filmstrip.png and motion.gif here")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
+    _add_plugins_arg(p)
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
@@ -91,6 +119,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="filmstrip.png")
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
+    _add_plugins_arg(p)
     p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
     p.add_argument("task")
     p.add_argument("--controllers", default="gp,bsr-sense,bsr-time")
@@ -103,14 +132,16 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=0)
     p.add_argument("--scheduler")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    _add_plugins_arg(p)
     p.add_argument("--quiet", action="store_true")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--bvh", required=True, metavar="OUT.bvh")
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
+    _add_plugins_arg(p)
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    _add_plugins_arg(p)
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
     return ap
 
@@ -138,10 +169,8 @@ def cmd_list(args):
     from . import figure_names
     from .families import FAMILIES
     from .gp import primitives
-    from .plugins import load_folder
     from .task import get_task, task_names
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     primitives.load_builtin()
     if args.what in ("all", "tasks"):
         print("tasks:")
@@ -160,6 +189,7 @@ def _run_configs(args):
     from .records import validate_number
     from .run import RunConfig
     params = _params(args.param)
+    plugins = _activate_plugins(args)
     series = {k: v.split(",") for k, v in params.items() if "," in v}
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
@@ -198,7 +228,7 @@ def _run_configs(args):
                             search={k: v_ for k, v_ in search.items() if v_ is not None},
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
-                            plugins=[str(Path(d).resolve()) for d in args.plugins]), name
+                            plugins=list(plugins)), name
 
 
 def _out_dir(args, seed, key, value) -> Path:
@@ -216,7 +246,7 @@ def cmd_run(args):
     results = []
     for cfg, out in _run_configs(args):
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
-                             artifacts=not args.no_artifacts)
+                             artifacts=not args.no_artifacts, backend=_backend(args))
         results.append((out, cost, rd))
         _summary(rd)
     return 0
@@ -235,13 +265,18 @@ def _summary(rd):
 
 def cmd_resume(args):
     from .run import run
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet)
+    _activate_plugins(args)
+    backend = _backend(args)
+    if args.workers is not None or args.scheduler is not None:
+        backend.update(workers=args.workers or 0, scheduler=args.scheduler)
+    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend)
     _summary(rd)
 
 
 def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -282,6 +317,7 @@ def cmd_render(args):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
     if args.figure and args.trees:
         raise ValueError("--trees needs a GP controller, not --figure")
+    _activate_plugins(args)
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
@@ -316,6 +352,7 @@ def cmd_compare(args):
     validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
     validate_number("--population", args.population, lo=2, hi=10**6, integer=True)
     out = args.out or f"runs/compare-{args.task}"
+    _activate_plugins(args)
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
                        params=_params(args.param), population=args.population,
                        workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
@@ -328,6 +365,7 @@ def cmd_export(args):
     from .records import validate_number
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
@@ -340,10 +378,8 @@ def cmd_export(args):
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
-    from .plugins import load_folder
     from .task import task_names
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     primitives.load_builtin()
     bad = 0
     for name in primitives.names():

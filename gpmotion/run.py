@@ -53,10 +53,8 @@ class RunConfig:
 def build(cfg: RunConfig):
     """Task, family and search (not yet the evaluator) from a config."""
     validate_number("--seed", cfg.seed, lo=0, integer=True)
-    if cfg.plugins:
-        from .plugins import load_folder
-        for folder in cfg.plugins:
-            load_folder(folder)
+    from .plugins import require          # records to check, never folders to import
+    cfg.plugins = require(cfg.plugins, "the run's plugins (config.json)")
     task = get_task(cfg.task, **cfg.params)
     family = make_family(cfg.family, task, **cfg.family_options)
     search = make_search(family, cfg.seed, **cfg.search)
@@ -64,10 +62,11 @@ def build(cfg: RunConfig):
     return task, family, search, actuation
 
 
-def _evaluator(cfg, task, family, actuation):
+def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
-                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins)
+                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
+                          **(backend or {}))
 
 
 class Progress:
@@ -121,17 +120,34 @@ def _trim_log(run: RunDir, evaluations: int):
 
 
 def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
-        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None):
-    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir)."""
+        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None,
+        backend: dict | None = None):
+    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
+
+    ``backend``: this invocation's evaluator settings (``workers``, ``scheduler``,
+    ``security``...); on resume ``workers``/``scheduler`` replace the recorded
+    ones -- every backend gives the same result.
+    """
+    backend = dict(backend or {})
     if resume:
         if not (Path(out) / RunDir.CONFIG).exists():
             raise ValueError(f"{out}: no config.json to resume from")
         rd = RunDir.create(out, resume=True)
         cfg = RunConfig.from_json(rd.read_config()["run"])
+        if "workers" in backend or "scheduler" in backend:
+            cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
         task, family, search, actuation = build(cfg)
-    else:       # validate everything before touching the disk
+        evaluator = None                                    # made once the checkpoint is read
+    else:       # validate everything (the scheduler too) before touching the disk
         task, family, search, actuation = build(cfg)
-        rd = RunDir.create(out, force=force)
+        evaluator = _evaluator(cfg, task, family, actuation, backend)
+        try:
+            rd = RunDir.create(out, force=force)
+        except BaseException:
+            evaluator.close()
+            raise
+        from .plugins import for_record
+        cfg.plugins = for_record(cfg.plugins, rd.path)      # path relative to the run: information
     evals = 0
     elapsed0 = 0.0
     if resume and rd.checkpoint_path.exists():
@@ -150,7 +166,8 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
     if not quiet:
         print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
               f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
-    evaluator = _evaluator(cfg, task, family, actuation)
+    if evaluator is None:
+        evaluator = _evaluator(cfg, task, family, actuation, backend)
     prog = Progress(search.total, quiet)
     t0 = time.perf_counter() - elapsed0
     stop = {"flag": False}
