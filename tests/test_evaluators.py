@@ -133,6 +133,7 @@ def _fake_evaluator(chunk_size, fail_first=frozenset(), workers=3, max_retries=3
     ev = ProcessPoolEvaluator(_FakeTask(), _FakeFamily(), workers=workers, chunk_size=chunk_size,
                               max_retries=max_retries)
     ev._executor_factory = lambda: ThreadPoolExecutor(max_workers=workers)
+    ev.workers = workers                 # threads here: not capped at this machine's CPUs
     seen = set()
 
     def flaky(spec, genomes_json, progress):
