@@ -159,10 +159,10 @@ def main(argv=None) -> int:
         return 130
     except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
-        if type(e).__name__ == "WorkerLost":
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost") and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
-        return 2
+        return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
 
 
 def cmd_list(args):

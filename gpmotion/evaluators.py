@@ -75,6 +75,7 @@ _ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.\-]+
 # Exit code of a command whose Dask scheduler went away for good (README, "Clusters").
 EXIT_SCHEDULER_LOST = 3
 # Seconds a lost scheduler has to come back; seconds to reach it at the start.
+# (GPMOTION_RECONNECT_GRACE overrides the grace: a batch job may rather fail fast.)
 RECONNECT_GRACE = 30.0
 CONNECT_TIMEOUT = 10.0
 # Seconds between checks that any worker is connected while a batch waits.
@@ -471,7 +472,7 @@ class DaskEvaluator(_ChunkedEvaluator):
 
     def __init__(self, task, family, scheduler: str = "local", workers: int = 2, actuation=None,
                  chunk_size=None, plugins=None, max_retries: int = 3,
-                 timeout: float = CONNECT_TIMEOUT, reconnect_grace: float = RECONNECT_GRACE,
+                 timeout: float = CONNECT_TIMEOUT, reconnect_grace: float | None = None,
                  tls_ca_file=None, tls_cert=None, tls_key=None, quiet: bool = False):
         scheduler = check_scheduler(scheduler)
         workers = _check_workers(workers)
@@ -483,9 +484,11 @@ class DaskEvaluator(_ChunkedEvaluator):
             workers = capped
         super().__init__(task, family, workers, actuation, chunk_size, plugins, max_retries)
         distributed = _import_distributed()
+        import logging      # our one line (SchedulerLost) replaces the client's reconnect errors
+        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
         self.security = make_security(scheduler, tls_ca_file, tls_cert, tls_key)
         self.scheduler = scheduler
-        self.reconnect_grace = float(reconnect_grace)
+        self.reconnect_grace = _grace(reconnect_grace)
         self.quiet = quiet
         self._cluster = None
         self._client = None
@@ -652,6 +655,21 @@ class DaskEvaluator(_ChunkedEvaluator):
                 cluster.close()
             except Exception:
                 pass
+
+
+def _grace(value) -> float:
+    """Seconds a lost scheduler may take to come back: the argument, $GPMOTION_RECONNECT_GRACE
+    or RECONNECT_GRACE."""
+    name = "reconnect_grace"
+    if value is None:
+        value, name = os.environ.get("GPMOTION_RECONNECT_GRACE", RECONNECT_GRACE), "GPMOTION_RECONNECT_GRACE"
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number of seconds, got {value!r}") from None
+    if not 0 <= value <= 86400:
+        raise ValueError(f"{name} must be between 0 and 86400 seconds, got {value!r}")
+    return value
 
 
 def _connection_errors():

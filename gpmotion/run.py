@@ -195,6 +195,11 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
             rd.save_checkpoint({"search": search.state_dict(), "evaluations": evals,
                                 "elapsed_s": el})
             prog.update(search.generation, ev, search.best_cost)
+    except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
+            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rd.path}` "
+                          "continues") from None
+        raise
     finally:
         if old is not None:
             signal.signal(signal.SIGINT, old)
