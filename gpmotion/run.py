@@ -44,10 +44,24 @@ class RunConfig:
     @classmethod
     def from_json(cls, d: dict) -> "RunConfig":
         keys = cls.__dataclass_fields__
+        if not isinstance(d, dict):
+            raise ValueError("config.json: no 'run' settings" if d is None else
+                             f"config.json: 'run' must be an object, got {type(d).__name__}")
         missing = [k for k in ("task", "family", "seed") if k not in d]
         if missing:
             raise ValueError(f"config.json lacks {missing}")
+        for k, types in _FIELD_TYPES.items():     # a hand-edited file: one line, not a TypeError
+            if k in d and not (isinstance(d[k], types) and not isinstance(d[k], bool) or
+                               d[k] is None and k in _OPTIONAL):
+                raise ValueError(f"config.json: run.{k} must be {types[0].__name__}, "
+                                 f"got {type(d[k]).__name__}")
         return cls(**{k: d[k] for k in keys if k in d})
+
+
+_FIELD_TYPES = {"task": (str,), "family": (str,), "seed": (int,), "params": (dict,),
+                "family_options": (dict,), "search": (dict,), "actuation": (str,), "workers": (int,),
+                "scheduler": (str,), "threads": (int,), "plugins": (list,)}
+_OPTIONAL = {"actuation", "scheduler", "threads", "plugins"}
 
 
 def build(cfg: RunConfig):
@@ -55,9 +69,12 @@ def build(cfg: RunConfig):
     validate_number("--seed", cfg.seed, lo=0, integer=True)
     from .plugins import require          # records to check, never folders to import
     cfg.plugins = require(cfg.plugins, "the run's plugins (config.json)")
-    task = get_task(cfg.task, **cfg.params)
-    family = make_family(cfg.family, task, **cfg.family_options)
-    search = make_search(family, cfg.seed, **cfg.search)
+    try:
+        task = get_task(cfg.task, **cfg.params)
+        family = make_family(cfg.family, task, **cfg.family_options)
+        search = make_search(family, cfg.seed, **cfg.search)
+    except TypeError as e:               # a hand-edited config.json: a value of the wrong type
+        raise ValueError(f"bad run settings ({e})") from None
     actuation = cfg.actuation or family.default_actuation
     return task, family, search, actuation
 
@@ -133,7 +150,7 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
         if not (Path(out) / RunDir.CONFIG).exists():
             raise ValueError(f"{out}: no config.json to resume from")
         rd = RunDir.create(out, resume=True)
-        cfg = RunConfig.from_json(rd.read_config()["run"])
+        cfg = RunConfig.from_json(rd.read_config().get("run"))
         if "workers" in backend or "scheduler" in backend:
             cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
         task, family, search, actuation = build(cfg)
@@ -155,6 +172,8 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
         try:
             search.load_state_dict(ck["search"])
             evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
+            if evals > 0 and search.best is None:
+                raise ValueError("no best genome after evaluations")
         except (KeyError, TypeError, ValueError, IndexError, AttributeError) as e:
             from .records import FormatError
             raise FormatError(f"{rd.checkpoint_path}: not a valid checkpoint ({e!r:.200})") from None
