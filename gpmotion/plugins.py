@@ -135,9 +135,9 @@ def activate(folders=()) -> list[dict]:
     """
     if isinstance(folders, (str, os.PathLike)):
         folders = [folders]
-    records = load_entry_points()
+    load_entry_points()
     for f in folders:
-        records.append(load_folder(f))
+        load_folder(f)
     return loaded()
 
 

@@ -299,3 +299,47 @@ def test_local_cluster_is_tls_on_loopback(problem):
         assert ev.client.scheduler.address.startswith("tls://127.0.0.1:")
         with pytest.raises(OSError):           # no certificate: the cluster does not talk to us
             distributed.Client(ev.client.scheduler.address.replace("tls://", "tcp://"), timeout=2)
+
+
+# ---- before anything is created; across backends ----------------------------------------------
+
+RUN = ["run", "lamp_hop", "--controller", "bsr-time", "--param", "seconds=0.3", "--working", "4",
+       "--generations", "3", "--seed", "1", "--quiet", "--no-artifacts"]
+
+
+@pytest.mark.parametrize("address", ["garbage", "tcp://127.0.0.1:99999", "tls://127.0.0.1:8786",
+                                     pytest.param("CLOSED", marks=pytest.mark.slow)])   # 10 s timeout
+def test_bad_or_unreachable_scheduler_creates_nothing(tmp_path, capsys, address):
+    from gpmotion.cli import main
+    if address == "CLOSED":
+        address = f"tcp://127.0.0.1:{_free_port()}"          # nothing listens there
+    out = tmp_path / "never"
+    assert main([*RUN, "--out", str(out), "--scheduler", address]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("gpmotion: error:") and "\n" not in err
+    assert not out.exists()
+
+
+def _best(d):
+    rec = json.loads((d / "best.json").read_text())
+    return rec["genome"], rec["final_cost"]
+
+
+@pytest.mark.slow
+def test_a_run_started_on_dask_resumes_on_a_process_pool_and_back(tmp_path):
+    from gpmotion.cli import main
+    from gpmotion.run import RunConfig, run
+    ref = tmp_path / "ref"
+    assert main([*RUN, "--out", str(ref)]) == 0
+    cfg = RunConfig(task="lamp_hop", family="bsr-time", seed=1, params={"seconds": "0.3"},
+                    search={"n_working": 4, "n_generations": 3}, scheduler="local", workers=1)
+    d = tmp_path / "moved"
+    run(cfg, d, quiet=True, artifacts=False, max_generations=1)      # stopped after one generation
+    assert not (d / "best.json").exists()
+    assert main(["resume", str(d), "--workers", "2", "--quiet"]) == 0
+    assert _best(d) == _best(ref)
+    cfg.scheduler, cfg.workers = None, 0                               # in-process -> Dask
+    back = tmp_path / "back"
+    run(cfg, back, quiet=True, artifacts=False, max_generations=1)
+    assert main(["resume", str(back), "--scheduler", "local", "--workers", "1", "--quiet"]) == 0
+    assert _best(back) == _best(ref)
