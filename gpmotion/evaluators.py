@@ -459,7 +459,8 @@ class DaskEvaluator(_ChunkedEvaluator):
     existing scheduler (start its workers with ``--nthreads 1`` and
     ``NUMBA_NUM_THREADS=1``; workers with more threads still evaluate one chunk
     at a time per process).  ``tls://`` addresses take ``tls_ca_file``,
-    ``tls_cert`` and ``tls_key`` (PEM files).  Workers are warmed once
+    ``tls_cert`` and ``tls_key`` (PEM files); ``local_tls=False`` makes a local
+    cluster plain tcp on loopback (benchmarks).  Workers are warmed once
     (imports, evaluator, numba kernels).  A task whose worker dies is
     rescheduled by Dask; a chunk that still fails with ``KilledWorker`` is
     resubmitted up to ``max_retries`` times.  A lost scheduler has
@@ -473,7 +474,8 @@ class DaskEvaluator(_ChunkedEvaluator):
     def __init__(self, task, family, scheduler: str = "local", workers: int = 2, actuation=None,
                  chunk_size=None, plugins=None, max_retries: int = 3,
                  timeout: float = CONNECT_TIMEOUT, reconnect_grace: float | None = None,
-                 tls_ca_file=None, tls_cert=None, tls_key=None, quiet: bool = False):
+                 tls_ca_file=None, tls_cert=None, tls_key=None, quiet: bool = False,
+                 local_tls: bool = True):
         scheduler = check_scheduler(scheduler)
         workers = _check_workers(workers)
         if scheduler == "local":
@@ -486,7 +488,8 @@ class DaskEvaluator(_ChunkedEvaluator):
         distributed = _import_distributed()
         import logging      # our one line (SchedulerLost) replaces the client's reconnect errors
         logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
-        self.security = make_security(scheduler, tls_ca_file, tls_cert, tls_key)
+        self.security = (make_security(scheduler, tls_ca_file, tls_cert, tls_key)
+                         if scheduler != "local" or local_tls else None)
         self.scheduler = scheduler
         self.reconnect_grace = _grace(reconnect_grace)
         self.quiet = quiet
