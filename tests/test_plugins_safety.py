@@ -202,3 +202,19 @@ def test_installed_entry_points_load_and_are_recorded(tmp_path, monkeypatch):
     from gpmotion.task import task_names
     assert "sec_ep_task" in task_names()
     assert plugins.require([rec], "best.json") == [rec]
+
+
+def test_one_loader_for_primitives_tasks_and_figures(tmp_path, capsys):
+    """A plugin folder's TOML figures register under their file name, with the folder's digest
+    covering them (a changed figure is changed code for a run)."""
+    folder = tmp_path / "figs"
+    folder.mkdir()
+    (folder / "sec_stiff_lamp.toml").write_text('extends = "lamp"\nname = "sec_stiff_lamp"\n'
+                                                '[[joints]]\nname = "elbow"\nkp = 400.0\n')
+    before = plugins.folder_digest(folder)
+    assert main(["render", "--figure", "sec_stiff_lamp", "--seconds", "0.1", "-o",
+                 str(tmp_path / "f.png"), "--plugins", str(folder)]) == 0
+    from gpmotion import figure_names
+    assert "sec_stiff_lamp" in figure_names()
+    (folder / "sec_stiff_lamp.toml").write_text((folder / "sec_stiff_lamp.toml").read_text() + "\n")
+    assert plugins.folder_digest(folder) != before
