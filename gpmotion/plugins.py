@@ -44,6 +44,7 @@ class PluginError(ValueError):
 # requirement records of everything loaded in this process, by digest
 _LOADED: dict[str, dict] = {}
 _FOLDERS: dict[Path, dict] = {}
+_SOURCES: dict[str, dict[str, str]] = {}      # digest -> the files as hashed (shipped to workers)
 
 
 def import_package(package: str) -> None:
@@ -72,7 +73,11 @@ def _digest_of(named_bytes: list[tuple[str, bytes]]) -> str:
 
 def folder_digest(folder: str | Path) -> str:
     """SHA-256 over the names and contents of a folder's plugin files."""
-    return _digest_of([(p.name, p.read_bytes()) for p in plugin_files(folder)])
+    return _digest_of(list(_read(folder).items()))
+
+
+def _read(folder) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in plugin_files(folder)}
 
 
 def load_folder(folder: str | Path) -> dict:
@@ -89,7 +94,8 @@ def load_folder(folder: str | Path) -> dict:
         raise PluginError(f"--plugins: no such folder: {folder}")
     if path in _FOLDERS:
         return {k: v for k, v in _FOLDERS[path].items() if k != "folder"}
-    record = {"name": path.name, "digest": folder_digest(path)}
+    files = _read(path)
+    record = {"name": path.name, "digest": _digest_of(list(files.items()))}
     if record["digest"] in _LOADED:           # the same code from another place: loaded already
         return record
     _load_builtin()               # built-ins first, so a clash names the user's file
@@ -99,6 +105,10 @@ def load_folder(folder: str | Path) -> dict:
         if toml.stem not in figure_names():
             register_figure(toml.stem, toml)
     _FOLDERS[path] = _LOADED[record["digest"]] = {**record, "folder": str(path)}
+    try:
+        _SOURCES[record["digest"]] = {n: b.decode("utf-8") for n, b in files.items()}
+    except UnicodeDecodeError:                # loaded here, but cannot travel to workers as text
+        pass
     return record
 
 
@@ -233,10 +243,10 @@ def sources_of(records) -> list[dict]:
     for r in records:
         full = _LOADED.get(r.get("digest")) or next(
             (x for x in _LOADED.values() if r.get("digest") is None and x["name"] == r.get("name")), None)
-        if full is None or "folder" not in full:
-            continue
-        files = {p.name: p.read_text(encoding="utf-8") for p in plugin_files(full["folder"])}
-        out.append({"name": full["name"], "digest": full["digest"], "files": files})
+        if full is None or full["digest"] not in _SOURCES:
+            continue                          # an entry point: installed on the workers too
+        out.append({"name": full["name"], "digest": full["digest"],
+                    "files": dict(_SOURCES[full["digest"]])})
     return out
 
 

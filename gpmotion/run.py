@@ -174,7 +174,7 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
             evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
             if evals > 0 and search.best is None:
                 raise ValueError("no best genome after evaluations")
-        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as e:
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as e:
             from .records import FormatError
             raise FormatError(f"{rd.checkpoint_path}: not a valid checkpoint ({e!r:.200})") from None
         _trim_log(rd, evals)
