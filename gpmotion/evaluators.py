@@ -236,14 +236,13 @@ class _ChunkedEvaluator:
     target_task_seconds = TARGET_TASK_SECONDS     # least work per task for this backend's overhead
 
     def __init__(self, task, family, workers, actuation, chunk_size, plugins, max_retries):
-        from .plugins import loaded
+        from .plugins import loaded, require, sources_of
         plugins = loaded() if plugins is None else plugins     # default: all the user loaded
         self.task = task
         self.family = family
         self.workers = workers
         self.actuation = actuation or family.default_actuation
         self.chunk_size = _check_chunk_size(chunk_size)
-        from .plugins import require, sources_of
         self.plugins = require(list(plugins), "the evaluator's plugins")   # records, loaded already
         if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
             raise ValueError(f"max_retries must be an integer >= 0, got {max_retries!r}")
