@@ -69,11 +69,34 @@ def _add_run_args(p):
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--threads", type=int, help="numba threads in this process")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
-                   help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
+    _add_tls_args(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
     add_arguments(p)
+
+
+def _add_plugins_arg(p):
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
+                   help="folder of extra primitives/tasks/figures (repeatable); the only way, "
+                        "besides installed entry points, that gpmotion runs code not its own")
+
+
+def _add_tls_args(p):
+    p.add_argument("--tls-ca-file", metavar="PEM", help="Dask TLS: CA certificate (tls:// scheduler)")
+    p.add_argument("--tls-cert", metavar="PEM", help="Dask TLS: this client's certificate")
+    p.add_argument("--tls-key", metavar="PEM", help="Dask TLS: this client's private key")
+
+
+def _backend(args) -> dict:
+    """This invocation's evaluator settings (TLS files), never recorded in the run."""
+    return {k: getattr(args, k) for k in ("tls_ca_file", "tls_cert", "tls_key")
+            if getattr(args, k, None)}
+
+
+def _activate_plugins(args) -> list:
+    from .plugins import activate
+    return activate(getattr(args, "plugins", []) or [])
 
 
 def parser() -> argparse.ArgumentParser:
@@ -89,21 +112,26 @@ def parser() -> argparse.ArgumentParser:
                        "(gpmotion show TASK for one task's details)")
     p.add_argument("what", nargs="?", default="all",
                    choices=["all", "tasks", "figures", "primitives", "controllers"])
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
     p = sub.add_parser("show", help="a task's parameters, terms (doc, weight, phase-in), figure, "
                        "controlled joints, sites and senses")
     p.add_argument("task", help="task name (gpmotion list tasks)")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
     _add_run_args(sub.add_parser("run", help="evolve a controller for a task",
                                  description="Evolve a controller for a task.", epilog=STYLE_HELP,
                                  formatter_class=argparse.RawDescriptionHelpFormatter))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
     p.add_argument("run_dir", help="a run directory (runs/TASK-CONTROLLER-seedN)")
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
+    p.add_argument("--workers", type=int, help="resume on a process pool (replaces the recorded backend)")
+    p.add_argument("--scheduler", help="resume on Dask: 'local' or tcp://HOST:PORT (replaces it too)")
+    _add_tls_args(p)
+    _add_plugins_arg(p)
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--out", help="also write filmstrip.png and motion.gif here")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
+    _add_plugins_arg(p)
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
@@ -112,6 +140,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="filmstrip.png", help="filmstrip PNG (default filmstrip.png)")
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
+    _add_plugins_arg(p)
     p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
     p.add_argument("task", help="task name (gpmotion list tasks)")
     p.add_argument("--controllers", default="gp,bsr-sense,bsr-time",
@@ -126,14 +155,16 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    _add_plugins_arg(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--bvh", required=True, metavar="OUT.bvh", help="the BVH file to write")
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
+    _add_plugins_arg(p)
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR", help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
     p.add_argument("--only-plugins", action="store_true",
                    help="check only what the --plugins folders add, not the built-ins")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
@@ -159,10 +190,10 @@ def main(argv=None) -> int:
         return 0
     except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
-        if type(e).__name__ == "WorkerLost":
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost") and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
-        return 2
+        return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
 
 
 def _help(ap, topic):
@@ -186,10 +217,8 @@ def cmd_list(args):
     from . import figure_names
     from .families import FAMILIES
     from .gp import primitives
-    from .plugins import load_folder
     from .task import get_task, task_names
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     primitives.load_builtin()
     if args.what in ("all", "tasks"):
         print("tasks:")
@@ -206,10 +235,8 @@ def cmd_list(args):
 
 
 def cmd_show(args):
-    from .plugins import load_folder
     from .show import describe_task
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     print(describe_task(args.task))
 
 
@@ -222,15 +249,13 @@ def _run_configs(args):
     if args.controller not in FAMILIES:
         raise ValueError(unknown("controller", args.controller, FAMILIES))
     params = _params(args.param)
+    plugins = _activate_plugins(args)     # before the options: --primitives may name a plugin's
     series = {k: v.split(",") for k, v in params.items() if "," in v}
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
     validate_number("--seeds", args.seeds, lo=1, hi=10_000, integer=True)
     validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
-    for d in args.plugins:          # before the options: --primitives may name a plugin's
-        from .plugins import load_folder
-        load_folder(d)
     search, fam = collect(args, args.controller)
     if args.figure:
         params["figure"] = _figure_variant(args.task, args.figure)
@@ -246,7 +271,7 @@ def _run_configs(args):
                             family_options=dict(fam), search=dict(search),
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
-                            plugins=[str(Path(d).resolve()) for d in args.plugins]), name
+                            plugins=list(plugins)), name
 
 
 def _figure_variant(task_name, path):
@@ -277,7 +302,7 @@ def cmd_run(args):
     dirs = []
     for cfg, out in configs:
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
-                             artifacts=not args.no_artifacts)
+                             artifacts=not args.no_artifacts, backend=_backend(args))
         dirs.append(rd.path)
         _summary(rd)
     if len(dirs) > 1:
@@ -315,7 +340,11 @@ def _summary(rd):
 def cmd_resume(args):
     from .run import run
     _refuse_series(Path(args.run_dir))
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet)
+    _activate_plugins(args)
+    backend = _backend(args)
+    if args.workers is not None or args.scheduler is not None:
+        backend.update(workers=args.workers or 0, scheduler=args.scheduler)
+    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend)
     _summary(rd)
 
 
@@ -333,6 +362,7 @@ def _refuse_series(path: Path):
 def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -376,6 +406,7 @@ def cmd_render(args):
     if args.source and args.seconds is not None:
         raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
                          "(the task's 'seconds' parameter)")
+    _activate_plugins(args)
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
@@ -415,6 +446,7 @@ def cmd_compare(args):
     population = validate_number("--population", 100 if args.population is None else args.population,
                                  lo=2, hi=10**6, integer=True)
     out = args.out or f"runs/compare-{args.task}"
+    _activate_plugins(args)
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
                        params=_params(args.param), population=population,
                        workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
@@ -427,6 +459,7 @@ def cmd_export(args):
     from .records import validate_number
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
@@ -439,14 +472,12 @@ def cmd_export(args):
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
-    from .plugins import load_folder
     from .task import task_names
     if args.only_plugins and not args.plugins:
         raise ValueError("--only-plugins needs --plugins DIR")
     primitives.load_builtin()
     prims_before, tasks_before = set(primitives.names()), set(task_names())
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     prims, tasks = primitives.names(), task_names()
     if args.only_plugins:
         prims = [n for n in prims if n not in prims_before]
