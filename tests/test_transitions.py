@@ -55,15 +55,20 @@ def test_mutation_randomizes_a_third_and_perturbs_two_thirds():
 
 
 def test_keep_if_better_then_bottom_half_becomes_top_half():
-    ts = TransitionSearch(1, 1.0, guess=[0.5], Q=4, H=1, seed=3)
+    ts = TransitionSearch(1, 1.0, guess=[0.5], Q=4, H=2, seed=3)
     ts.ask()
     ts.tell([-10.0])
     x = ts.ask()
-    ts.tell([-1.0, -20.0, -3.0, -2.0])                       # slot 1 gets worse: kept at −10
-    # ranking −1 (slot 0), −2 (slot 3), −3 (slot 2), −10 (slot 1): the top two are copied down
-    np.testing.assert_allclose(ts.scores, [-1.0, -2.0, -1.0, -2.0])
-    np.testing.assert_allclose(ts.pop[:, 0], [x[0, 0], x[3, 0], x[0, 0], x[3, 0]])
-    assert ts.round == 1 and ts.best_score == -1.0
+    assert not np.any(x[:, 0] == 0.5)
+    ts.tell([-1.0, -20.0, -30.0, -2.0])                      # slots 1 and 2 got worse: kept
+    np.testing.assert_allclose(ts.scores, [-1.0, -10.0, -10.0, -2.0])
+    np.testing.assert_allclose(ts.pop[:, 0], [x[0, 0], 0.5, 0.5, x[3, 0]])
+    y = ts.ask()
+    ts.tell([-5.0, -9.0, -11.0, -1.5])                       # slot 1 and 3 improve
+    # ranking −1 (slot 0), −1.5 (slot 3), −9 (slot 1), −10 (slot 2): the top two are copied down
+    np.testing.assert_allclose(ts.scores, [-1.0, -1.5, -1.0, -1.5])
+    np.testing.assert_allclose(ts.pop[:, 0], [x[0, 0], y[3, 0], x[0, 0], y[3, 0]])
+    assert ts.round == 1 and ts.step == 0 and ts.best_score == -1.0
 
 
 def test_same_seed_same_search_other_seed_another():
