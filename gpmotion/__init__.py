@@ -28,6 +28,7 @@ from .figures import SpecError, compile_spec, figure_names, load_figure, registe
 from .model import Figure, Model, Scene, make_scene
 from .sim.rollout import Trajectory, rollout, simulate
 from .task import Ease, Task, Term, get_task, register_task, task_names
+from . import compose  # composite motions: script language, composites, transition search, robust starts
 
 
 def check_primitive(*args, **kw):
