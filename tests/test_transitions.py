@@ -140,3 +140,24 @@ def test_search_on_a_composite_finds_the_scripted_switch(tmp_path):
     assert bounds[0, 1] == 31 and totals[0] == pytest.approx(1.0)
     with pytest.raises(C.CompositeError, match="script has 1 phase"):
         optimize.search(comp, script.parse("phase a = 1\ntotal = a"))
+
+
+def test_compose_run_directory_resumes_exactly(tmp_path):
+    from gpmotion.compose import session
+    write_controller(tmp_path / "a.json")
+    comp = C.from_controllers([tmp_path / "a.json", tmp_path / "a.json"], switches=[0.3], seconds=1.0)
+    text = "phase one = dtime ~= 0.62\nphase two = max_t(cm_z)\ntotal = one + 0.1 * two\n"
+    kw = dict(Q=4, G=4, H=1, seed=2, log=lambda m: None)
+    full = session.compose_run(tmp_path / "full", text, comp, **kw)
+    assert session.compose_run(tmp_path / "part", text, comp, stop_after_rounds=2, **kw) is None
+    assert len((tmp_path / "part" / "log.csv").read_text().splitlines()) == 1 + 2
+    with pytest.raises(ValueError, match="not empty"):
+        session.compose_run(tmp_path / "part", text, comp, **kw)
+    with pytest.raises(ValueError, match="differs"):
+        session.compose_run(tmp_path / "part", text, comp, resume=True, **dict(kw, seed=3))
+    resumed = session.compose_run(tmp_path / "part", text, comp, resume=True, **kw)
+    assert resumed == full and full["simulations"] == 1 + 4 * 4 * 1
+    assert (tmp_path / "part" / "log.csv").read_text() == (tmp_path / "full" / "log.csv").read_text()
+    best = C.load(tmp_path / "full" / "composite.json")
+    assert best.switches.tolist() == full["best"]["switches"]
+    assert full["best"]["total"] >= full["careless"]["total"]
