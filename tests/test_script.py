@@ -175,3 +175,21 @@ def test_bounds_are_checked():
         S.evaluate(s, traj, [[0, 2]])
     with pytest.raises(ValueError, match="non-decreasing"):
         S.evaluate(s, traj, [[0, 2, 1]])
+
+
+def test_measures_on_a_simulated_lamp_match_numpy():
+    """Each measure is what its doc says, on a real trajectory (the lamp settling, goal 0.4 m ahead)."""
+    from gpmotion import load_figure, simulate
+    fig = load_figure("lamp")
+    traj = simulate(fig, 0.6, scene=make_scene(goal=(0.4, 0.0)), record_every=10)
+    s = S.parse('phase a = last(goal_distance_of("base_centre"))\nphase b = sum_t(energy) + max_t(impact)\n'
+                'total = mean_t(speed) + 10 * last(site_z("head_tip")) + max_t(time) + last(goal_distance)')
+    S.bind(s, fig)
+    F = traj.q.shape[1]
+    out = S.evaluate(s, traj, [[0, 20, F - 1]])
+    base = traj.site("base_centre")[0, 20]                  # phase a: frames 0..20
+    assert out["a"][0] == pytest.approx(np.hypot(base[0] - 0.4, base[1]))
+    assert out["b"][0] == pytest.approx(traj.energy[0, 20:].sum() + traj.impact[0, 20:].max())
+    speed = np.linalg.norm(traj.com[0, :, 2:4], axis=-1).mean()
+    com_goal = np.hypot(traj.com[0, -1, 0] - 0.4, traj.com[0, -1, 1])
+    assert out["total"][0] == pytest.approx(speed + 10 * traj.site("head_tip")[0, -1, 1] + traj.times[-1] + com_goal)
