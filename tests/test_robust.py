@@ -94,3 +94,27 @@ def test_evaluate_is_deterministic_and_aggregates_k_starts():
     worst, *_ = R.evaluate(task, fam, genomes, k=4, seed=3, round_=5, how="worst")
     np.testing.assert_allclose(worst, costs.reshape(2, 4).max(axis=1))
     assert a[2].n_episodes == 8 and np.all((a[1] >= 0) & (a[1] <= 1))
+
+
+def test_robustness_table_nominal_first_and_deterministic(tmp_path, capsys):
+    import json as _json
+
+    from gpmotion.compose import robust_command
+    from gpmotion.replay import load_controller, replay_genome
+    from tests.test_composite import write_controller
+    path = write_controller(tmp_path / "c.json", family="bsr-time", seconds=0.5, seed=4)
+    task, fam, act, genome, _ = load_controller(path)
+    r = R.robustness(task, fam, act, genome, trials=6, seed=1)
+    _, costs, _, ok = replay_genome(task, fam, act, genome)
+    assert r["nominal_cost"] == pytest.approx(float(costs[0])) and r["nominal_success"] == bool(ok[0])
+    assert r["success_rate"] == np.mean(r["success"]) and len(r["costs"]) == 6
+    assert r["cost_min"] <= r["cost_median"] <= r["cost_max"]
+    assert R.robustness(task, fam, act, genome, trials=6, seed=1)["costs"] == r["costs"]
+    assert robust_command.main([str(path), "--trials", "6", "--seed", "1", "--json",
+                                "--plot", str(tmp_path / "r.png")]) == 0
+    assert _json.loads(capsys.readouterr().out)["costs"] == r["costs"]
+    assert (tmp_path / "r.png").stat().st_size > 1000
+    assert robust_command.main([str(tmp_path / "missing.json")]) == 2
+    assert robust_command.main([str(path), "--joint", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "perturbation joint must be" in err

@@ -173,3 +173,28 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
                           record_senses=family.needs_senses, threads=threads)
     costs, _, ok = task.score(traj, progress)
     return aggregate(costs, k, how), np.asarray(ok, float).reshape(-1, k).mean(axis=1), traj
+
+
+def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int = 0,
+               sizes: Perturbation = Perturbation(), threads: int | None = None) -> dict:
+    """Success rate and cost spread of one controller over ``trials`` perturbed starts.
+
+    Trial 0 is the nominal start (so the table also says how the controller
+    does as evolved); the other trials are drawn from ``round_rng(seed, 0)``.
+    """
+    if not 1 <= trials <= 100_000:
+        raise ValueError(f"trials must be in 1..100000, got {trials}")
+    q0, qd0 = task.initial_state()
+    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, trials, round_rng(seed, 0), sizes)
+    q0s[0], qd0s[0] = q0, qd0
+    traj = robust_rollout(task.fig, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
+                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          actuation=actuation, default_tau=family.default_tau,
+                          record_senses=family.needs_senses, threads=threads)
+    costs, _, ok = task.score(traj, 1.0)
+    costs, ok = np.asarray(costs, float), np.asarray(ok, bool)
+    q = np.percentile(costs, [0, 25, 50, 75, 100])
+    return {"trials": trials, "seed": seed, "success_rate": float(ok.mean()), "nominal_success": bool(ok[0]),
+            "nominal_cost": float(costs[0]), "cost_min": q[0], "cost_q25": q[1], "cost_median": q[2],
+            "cost_q75": q[3], "cost_max": q[4], "diverged": int(traj.diverged.sum()),
+            "sizes": asdict(sizes), "costs": costs.tolist(), "success": ok.tolist()}
