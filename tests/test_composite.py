@@ -156,3 +156,23 @@ def test_bad_switch_arrays(ctrl_dir):
         comp.bounds([[np.nan]])
     # out-of-range and unsorted switch times are clipped and sorted, not refused (a search mutates them)
     assert comp.bounds([[-1.0], [9.0]]).tolist() == [[0, 0, 100], [0, 100, 100]]
+
+
+def test_shared_histories_are_simulated_once_and_exactly(ctrl_dir, monkeypatch):
+    """Episodes with the same start and switches share phases; per-episode starts are respected."""
+    comp = C.from_controllers([ctrl_dir / "gp.json", ctrl_dir / "time.json"], switches=[0.4], seconds=1.0)
+    q0 = np.tile(comp.figure.q_default, (4, 1))
+    q0[1, 2] += 0.2                                        # episode 1 starts tilted
+    switches = [[0.4], [0.4], [0.4], [0.6]]
+    calls = []
+    real = C.rollout
+    monkeypatch.setattr(C, "rollout", lambda *a, **kw: calls.append(kw["q0"].shape[0]) or real(*a, **kw))
+    traj, _ = C.run(comp, switches, q0=q0)
+    # phase 1: starts {nominal, tilted} × switch frames {20, 30} → 3 distinct histories, 2 durations
+    assert sorted(calls[:2]) == [1, 2] and sum(calls) == 3 + 3
+    monkeypatch.setattr(C, "rollout", real)
+    for e in range(4):
+        one, _ = C.run(comp, [switches[e]], q0=q0[e])
+        np.testing.assert_array_equal(traj.q[e], one.q[0])
+        np.testing.assert_array_equal(traj.energy[e], one.energy[0])
+    assert not np.array_equal(traj.q[0], traj.q[1]) and np.array_equal(traj.q[0], traj.q[2])

@@ -232,22 +232,35 @@ def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
     contact = None if contact0 is None else _rows(contact0, E, 2)
     out, written = None, np.full(E, -1, np.int64)        # last frame written per episode
     diverged, diverged_step = np.zeros(E, bool), np.full(E, -1, np.int64)
+    start = _start_ids(q, qd, contact)
     for k, part in enumerate(comp.parts):
         dur = bounds[:, k + 1] - bounds[:, k]
-        for d in np.unique(dur[(dur > 0) & ~diverged]):
-            idx = np.flatnonzero((dur == d) & ~diverged)
-            tr = rollout(fig, comp.scene, part.batch(len(idx)), n_steps=int(d) * comp.record_every,
-                         q0=q[idx], qd0=qd[idx], contact0=None if contact is None else contact[idx],
+        active = np.flatnonzero((dur > 0) & ~diverged)
+        if active.size == 0:
+            continue
+        # episodes with the same start and the same switches so far have the same past and
+        # this same phase: simulate one of them (a search's arrays often share a prefix)
+        keys = np.concatenate([start[active, None], bounds[active, :k + 2]], axis=1)
+        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        rep_of = active[first][inverse.reshape(-1)]         # each active episode's representative
+        for d in np.unique(dur[active[first]]):
+            reps = active[first][dur[active[first]] == d]
+            tr = rollout(fig, comp.scene, part.batch(len(reps)), n_steps=int(d) * comp.record_every,
+                         q0=q[reps], qd0=qd[reps], contact0=None if contact is None else contact[reps],
                          dt=comp.dt, record_every=comp.record_every, actuation=part.actuation,
                          default_tau=part.family.default_tau, threads=threads)
             if out is None:
                 out = {c: np.zeros((E, F) + getattr(tr, c).shape[2:]) for c in _CHANNELS}
                 contact = np.zeros((E,) + tr.contact_end.shape[1:]) if contact is None else contact
-            _paste(out, tr, idx, bounds[idx, k], written)
-            q[idx], qd[idx], contact[idx] = tr.q[:, -1], tr.qd[:, -1], tr.contact_end
-            bad = tr.diverged
-            diverged[idx[bad]] = True
-            diverged_step[idx[bad]] = bounds[idx[bad], k] * comp.record_every + tr.diverged_step[bad]
+            row = np.full(E, -1)
+            row[reps] = np.arange(len(reps))
+            members = active[np.isin(rep_of, reps)]
+            rows = row[rep_of[np.isin(rep_of, reps)]]
+            _paste(out, tr, rows, members, bounds[members, k], written)
+            q[members], qd[members], contact[members] = tr.q[rows, -1], tr.qd[rows, -1], tr.contact_end[rows]
+            bad = tr.diverged[rows]
+            diverged[members[bad]] = True
+            diverged_step[members[bad]] = bounds[members[bad], k] * comp.record_every + tr.diverged_step[rows[bad]]
     _freeze(out, written)
     traj = Trajectory(figure=fig, scene=comp.scene, dt=comp.dt, record_every=comp.record_every,
                       times=np.arange(F) * comp.frame_seconds, senses=None, diverged=diverged,
@@ -261,15 +274,22 @@ def _rows(x, E: int, nd: int) -> np.ndarray:
     return np.array(np.broadcast_to(x, (E,) + x.shape[x.ndim - nd:]), order="C")
 
 
-def _paste(out: dict, tr: Trajectory, idx, start, written) -> None:
-    """Frames 1.. of a phase rollout after each episode's switch frame (frame 0 repeats the
-    switch frame the previous phase recorded; the motion's very first frame is its own)."""
+def _paste(out: dict, tr: Trajectory, rows, idx, start, written) -> None:
+    """Frames 1.. of rollout row ``rows[j]`` after episode ``idx[j]``'s switch frame (frame 0
+    repeats the switch frame the previous phase recorded; the motion's very first frame is its own)."""
     n = tr.q.shape[1]
     for j, e in enumerate(idx):
         lo = 0 if written[e] < 0 else 1
         for c in _CHANNELS:
-            out[c][e, start[j] + lo:start[j] + n] = getattr(tr, c)[j, lo:]
+            out[c][e, start[j] + lo:start[j] + n] = getattr(tr, c)[rows[j], lo:]
         written[e] = start[j] + n - 1
+
+
+def _start_ids(q, qd, contact) -> np.ndarray:
+    """An id per episode; equal ids: the same initial state."""
+    parts = [q, qd] + ([] if contact is None else [contact.reshape(len(q), -1)])
+    _, ids = np.unique(np.concatenate(parts, axis=1), axis=0, return_inverse=True)
+    return ids.reshape(-1)
 
 
 def _freeze(out: dict, written) -> None:
