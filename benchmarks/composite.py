@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from pathlib import Path
 
@@ -80,11 +81,12 @@ def main(argv=None):
     optimize.score(comp, s, [comp.switches])          # compile every phase's kernel before timing
     print(f"(warm-up incl. kernel compile/load: {time.perf_counter() - t0:.1f} s)")
     careless, traj0 = report("careless", comp, s, comp.switches)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     ts = optimize.search(comp, s, Q=a.Q, G=a.G, H=a.H, seed=a.seed)
-    wall = time.perf_counter() - t0
-    print(f"transition search: {ts.evaluations} simulations of {comp.seconds:g} s in {wall:.1f} s "
-          f"(Q={a.Q}, G={a.G}, H={a.H}, seed {a.seed})")
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"transition search: {ts.evaluations} simulations of {comp.seconds:g} s in {wall:.1f} s wall, "
+          f"{cpu:.1f} s CPU (load average {load:.1f}; Q={a.Q}, G={a.G}, H={a.H}, seed {a.seed})")
     fixed = optimize.repaired(comp, ts)
     repaired, traj1 = report("repaired", fixed, s, fixed.switches)
     C.save(out / "careless.json", comp)
@@ -96,7 +98,7 @@ def main(argv=None):
     except Exception as e:          # pictures are a bonus; the numbers are the result
         print(f"(no filmstrips: {e})")
     summary = {"controllers": a.controllers, "seed": a.seed, "Q": a.Q, "G": a.G, "H": a.H,
-               "simulations": ts.evaluations, "search_seconds": wall, "careless": careless,
+               "simulations": ts.evaluations, "search_seconds": wall, "search_cpu_seconds": cpu, "careless": careless,
                "repaired": repaired, "done_thresholds": DONE}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     print(f"wrote {out}/summary.json, careless/repaired .json and .png")
