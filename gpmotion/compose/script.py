@@ -232,7 +232,9 @@ def load(path) -> Script:
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
-        raise ScriptError(1, 1, f"cannot read script {path}: {e}") from None
+        err = ScriptError(1, 1, f"cannot read script ({e})")
+        err.args = (f"{path}: cannot read script ({e})",)
+        raise err from None
     try:
         return parse(text)
     except ScriptError as e:
