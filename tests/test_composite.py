@@ -32,6 +32,7 @@ def ctrl_dir(tmp_path_factory):
     d = tmp_path_factory.mktemp("ctrl")
     write_controller(d / "gp.json")
     write_controller(d / "time.json", family="bsr-time", seed=3)
+    write_controller(d / "sense.json", family="bsr-sense", seed=5)
     write_controller(d / "lamp.json", family="bsr-time", task="lamp_hop")
     return d
 
@@ -76,9 +77,11 @@ def test_one_controller_split_anywhere_is_the_single_run(ctrl_dir):
     assert traj.contact_force.max() > 0 and not traj.diverged.any()
 
 
-def test_each_phase_starts_fresh_from_the_switch_state(ctrl_dir):
-    """A time-based controller's clock starts at its switch: phase 2 is a new rollout from phase 1's end."""
-    comp = C.from_controllers([ctrl_dir / "gp.json", ctrl_dir / "time.json"], switches=[0.4], seconds=1.0)
+@pytest.mark.parametrize("second", ["time.json", "sense.json"])
+def test_each_phase_starts_fresh_from_the_switch_state(ctrl_dir, second):
+    """A time-based controller's clock starts at its switch, a sense-based one's rule memory is fresh:
+    phase 2 is a new rollout from phase 1's end state."""
+    comp = C.from_controllers([ctrl_dir / "gp.json", ctrl_dir / second], switches=[0.4], seconds=1.0)
     traj, bounds = C.run(comp)
     s = bounds[0, 1]
     assert s == 20
