@@ -9,8 +9,9 @@ from the previous phase's end, so a time-based controller's clock starts at
 its switch and a sense-based one starts its rule memory fresh.
 
 Switch times live on the frame grid (``dt × record_every``, the script's
-tick): a batch of episodes may switch at different frames; the episodes of a
-phase that last equally long run as one batch.
+tick): a batch of episodes may switch at different frames; each phase is one
+batched rollout (each episode runs its own length), and episodes with the
+same start and the same switches so far share one simulated episode.
 
 File format (JSON, ``format: gpmotion-composite``, version 1)::
 
@@ -225,8 +226,7 @@ def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
     """
     bounds = comp.bounds(switches)
     E, F, fig = bounds.shape[0], comp.n_frames, comp.figure
-    first = comp.parts[0].task
-    iq, iqd = first.initial_state()
+    iq, iqd = comp.parts[0].task.initial_state()
     q = _rows(iq if q0 is None else q0, E, 1)
     qd = _rows(iqd if qd0 is None else qd0, E, 1)
     contact = None if contact0 is None else _rows(contact0, E, 2)
@@ -241,26 +241,26 @@ def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
         # episodes with the same start and the same switches so far have the same past and
         # this same phase: simulate one of them (a search's arrays often share a prefix)
         keys = np.concatenate([start[active, None], bounds[active, :k + 2]], axis=1)
-        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-        rep_of = active[first][inverse.reshape(-1)]         # each active episode's representative
-        for d in np.unique(dur[active[first]]):
-            reps = active[first][dur[active[first]] == d]
-            tr = rollout(fig, comp.scene, part.batch(len(reps)), n_steps=int(d) * comp.record_every,
-                         q0=q[reps], qd0=qd[reps], contact0=None if contact is None else contact[reps],
-                         dt=comp.dt, record_every=comp.record_every, actuation=part.actuation,
-                         default_tau=part.family.default_tau, threads=threads)
-            if out is None:
-                out = {c: np.zeros((E, F) + getattr(tr, c).shape[2:]) for c in _CHANNELS}
-                contact = np.zeros((E,) + tr.contact_end.shape[1:]) if contact is None else contact
-            row = np.full(E, -1)
-            row[reps] = np.arange(len(reps))
-            members = active[np.isin(rep_of, reps)]
-            rows = row[rep_of[np.isin(rep_of, reps)]]
-            _paste(out, tr, rows, members, bounds[members, k], written)
-            q[members], qd[members], contact[members] = tr.q[rows, -1], tr.qd[rows, -1], tr.contact_end[rows]
-            bad = tr.diverged[rows]
-            diverged[members[bad]] = True
-            diverged_step[members[bad]] = bounds[members[bad], k] * comp.record_every + tr.diverged_step[rows[bad]]
+        _, lead, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        reps = active[lead]
+        rep_of = reps[inverse.reshape(-1)]                  # each active episode's representative
+        tr = rollout(fig, comp.scene, part.batch(len(reps)), n_steps=dur[reps] * comp.record_every,
+                     q0=q[reps], qd0=qd[reps], contact0=None if contact is None else contact[reps],
+                     dt=comp.dt, record_every=comp.record_every, actuation=part.actuation,
+                     default_tau=part.family.default_tau, threads=threads)
+        if out is None:
+            out = {c: np.zeros((E, F) + getattr(tr, c).shape[2:]) for c in _CHANNELS}
+            contact = np.zeros((E,) + tr.contact_end.shape[1:]) if contact is None else contact
+        row = np.full(E, -1)
+        row[reps] = np.arange(len(reps))
+        rows = row[rep_of]                                    # rollout row of each active episode
+        end = dur[active]                                     # its last frame in that rollout
+        _paste(out, tr, rows, active, bounds[active, k], end, written)
+        q[active], qd[active] = tr.q[rows, end], tr.qd[rows, end]
+        contact[active] = tr.contact_end[rows]
+        bad = tr.diverged[rows]
+        diverged[active[bad]] = True
+        diverged_step[active[bad]] = bounds[active[bad], k] * comp.record_every + tr.diverged_step[rows[bad]]
     _freeze(out, written)
     traj = Trajectory(figure=fig, scene=comp.scene, dt=comp.dt, record_every=comp.record_every,
                       times=np.arange(F) * comp.frame_seconds, senses=None, diverged=diverged,
@@ -274,15 +274,14 @@ def _rows(x, E: int, nd: int) -> np.ndarray:
     return np.array(np.broadcast_to(x, (E,) + x.shape[x.ndim - nd:]), order="C")
 
 
-def _paste(out: dict, tr: Trajectory, rows, idx, start, written) -> None:
-    """Frames 1.. of rollout row ``rows[j]`` after episode ``idx[j]``'s switch frame (frame 0
+def _paste(out: dict, tr: Trajectory, rows, idx, start, end, written) -> None:
+    """Frames 1..end[j] of rollout row ``rows[j]`` after episode ``idx[j]``'s switch frame (frame 0
     repeats the switch frame the previous phase recorded; the motion's very first frame is its own)."""
-    n = tr.q.shape[1]
     for j, e in enumerate(idx):
         lo = 0 if written[e] < 0 else 1
         for c in _CHANNELS:
-            out[c][e, start[j] + lo:start[j] + n] = getattr(tr, c)[rows[j], lo:]
-        written[e] = start[j] + n - 1
+            out[c][e, start[j] + lo:start[j] + end[j] + 1] = getattr(tr, c)[rows[j], lo:end[j] + 1]
+        written[e] = start[j] + end[j]
 
 
 def _start_ids(q, qd, contact) -> np.ndarray:

@@ -136,7 +136,7 @@ def rollout_batch(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, q
                   ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                   out_pole, out_impact, out_energy, out_targets, out_senses, status):
     for e in prange(q0.shape[0]):
-        run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0[e], qd0[e], contact[e],
+        run_episode(M, S, dt, n_steps[e], every, actuation, default_tau, limit, q0[e], qd0[e], contact[e],
                     ci[e], cf[e], cstate[e], record_senses, out_q[e], out_qd[e], out_com[e],
                     out_cforce[e], out_pole[e], out_impact[e], out_energy[e], out_targets[e],
                     out_senses[e], status[e])

@@ -189,15 +189,23 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     ``contact_end``); passing them as ``q0``, ``qd0``, ``contact0`` continues
     the motion exactly (``contact_end`` holds each contact point's friction
     anchor and touching flag; by default no point starts touching).
+
+    ``n_steps`` may give each episode its own length (a composite's phases):
+    episode e then ends at frame ⌈n_steps[e] / record_every⌉ (its
+    ``contact_end`` is taken there) and its later frames hold that pose with
+    zero velocity and no events, as after a divergence.
     """
     if actuation not in ACTUATION:
         raise ValueError(f"actuation must be one of {sorted(ACTUATION)}, got {actuation!r}")
     if not (np.isfinite(dt) and 0 < dt <= 0.01):
         raise ValueError(f"dt must be in (0, 0.01] s, got {dt!r}")
-    if n_steps < 1 or record_every < 1:
-        raise ValueError("n_steps and record_every must be >= 1")
-    n_steps = -(-int(n_steps) // record_every) * record_every   # whole frames
     E, nq, nv, m = controller.n_episodes, figure.nq, figure.nv, figure.model
+    steps = np.floor(np.asarray(n_steps, dtype=np.float64))      # as int(n_steps) did
+    if steps.ndim > 1 or steps.size not in (1, E) or not np.all(steps >= 1) or record_every < 1:
+        raise ValueError("n_steps (a number, or one per episode) and record_every must be >= 1")
+    steps = -(-steps.astype(np.int64) // record_every) * record_every     # whole frames
+    n_steps = int(steps.max())
+    steps = np.ascontiguousarray(np.broadcast_to(steps, (E,)))
     is3d = isinstance(m, Model3D)
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
@@ -217,7 +225,8 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
-        kernel.rollout_batch(m, scene, *extra, float(dt), n_steps, int(record_every), ACTUATION[actuation],
+        kernel.rollout_batch(m, scene, *extra, float(dt), steps, int(record_every),
+                             ACTUATION[actuation],
                              float(default_tau), DIVERGE_LIMIT, q0, qd0, contact,
                              np.ascontiguousarray(controller.ci, dtype=np.int64),
                              np.ascontiguousarray(controller.cf, dtype=np.float64), cstate,
