@@ -201,7 +201,7 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
         raise ValueError(f"dt must be in (0, 0.01] s, got {dt!r}")
     E, nq, nv, m = controller.n_episodes, figure.nq, figure.nv, figure.model
     steps = np.floor(np.asarray(n_steps, dtype=np.float64))      # as int(n_steps) did
-    if steps.ndim > 1 or steps.size not in (1, E) or not np.all(steps >= 1) or record_every < 1:
+    if steps.ndim > 1 or steps.size not in (1, E) or not np.all((steps >= 1) & (steps < 2**40)) or record_every < 1:
         raise ValueError("n_steps (a number, or one per episode) and record_every must be >= 1")
     steps = -(-steps.astype(np.int64) // record_every) * record_every     # whole frames
     n_steps = int(steps.max())
