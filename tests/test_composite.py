@@ -197,3 +197,17 @@ def test_shared_histories_are_simulated_once_and_exactly(ctrl_dir, monkeypatch):
         np.testing.assert_array_equal(traj.q[e], one.q[0])
         np.testing.assert_array_equal(traj.energy[e], one.energy[0])
     assert not np.array_equal(traj.q[0], traj.q[1]) and np.array_equal(traj.q[0], traj.q[2])
+
+
+@pytest.mark.slow
+def test_3d_rollout_continues_exactly_from_its_end_state():
+    """The same for a 3-D figure (free root, 2-D friction anchors)."""
+    fig = load_figure("herman_standing")
+    ctrl = schedule.constant(fig.model.neutral)
+    sc = make_scene()
+    full = rollout(fig, sc, ctrl, n_steps=600, record_every=10)
+    a = rollout(fig, sc, ctrl, n_steps=300, record_every=10)
+    assert a.contact_end.shape[-1] == 3 and np.any(a.contact_end[..., 2] == 1)
+    b = rollout(fig, sc, ctrl, n_steps=300, record_every=10, q0=a.q[:, -1], qd0=a.qd[:, -1],
+                contact0=a.contact_end)
+    np.testing.assert_array_equal(np.concatenate([a.q, b.q[:, 1:]], axis=1), full.q)
