@@ -141,6 +141,7 @@ def test_bad_totals_are_worst():
     ("phase a = last(site_x(cm_x))\ntotal = a", "1:23", "quoted name"),
     ('phase a = __import__("os")\ntotal = a', "1:11", "unknown function"),
     ("phase a = 1", "1:1", "needs a line `total"),
+    ("phase total = 1", "1:7", "'total' is the score, not a phase"),
     ("total = 1", "1:1", "declares no phase"),
     ("phase a = " + "-" * 300 + "1" + "\ntotal = a", "1:", "nested too deeply"),
 ])

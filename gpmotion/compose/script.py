@@ -252,6 +252,8 @@ def _check(statements: list[Statement], text: str) -> Script:
         if s.name in kinds or s.name in MEASURES or s.name in FUNCTIONS:
             what = "a measure" if s.name in MEASURES else "a function" if s.name in FUNCTIONS else "defined above"
             raise ScriptError(s.line, s.col, f"{s.name!r} is already {what}; pick another name")
+        if s.is_phase and s.name == "total":
+            raise ScriptError(s.line, s.col, "'total' is the score, not a phase: write `total = ...`")
         kind = kind_of(s.expr, kinds, depth=0)
         if s.is_phase or s.name == "total":
             if kind != NUMBER:
