@@ -115,10 +115,14 @@ def test_each_phase_starts_fresh_from_the_switch_state(ctrl_dir, second):
     assert time_part.actuation == "kinematic" and gp_part.actuation == "pd"
 
 
-def test_file_round_trip(ctrl_dir, tmp_path):
-    comp = C.from_controllers([ctrl_dir / "gp.json", ctrl_dir / "time.json"], switches=[0.4], seconds=1.0,
-                              names=["spin", "kick"])
-    C.save(tmp_path / "c.json", comp)
+def test_file_round_trip(ctrl_dir, tmp_path, monkeypatch):
+    monkeypatch.chdir(ctrl_dir)                 # controllers named relative to the working directory
+    comp = C.from_controllers(["gp.json", "time.json"], switches=[0.4], seconds=1.0, names=["spin", "kick"])
+    (tmp_path / "sub").mkdir()
+    C.save(tmp_path / "sub" / "c.json", comp)   # ... saved elsewhere: paths relative to the file
+    monkeypatch.chdir(tmp_path)
+    back = C.load(tmp_path / "sub" / "c.json")
+    C.save(tmp_path / "c.json", back)
     back = C.load(tmp_path / "c.json")
     assert [p.name for p in back.parts] == ["spin", "kick"] and back.switches.tolist() == [0.4]
     assert back.seconds == 1.0

@@ -48,7 +48,7 @@ class CompositeError(ValueError):
 class Part:
     """One loaded controller of a composite."""
     name: str
-    source: str             # the controller path as the user wrote it
+    source: str             # the controller file, resolved (absolute)
     task: object
     family: object
     actuation: str
@@ -117,7 +117,7 @@ def load_part(path, name: str | None = None, base: Path | None = None) -> Part:
     from ..replay import load_controller
     full = Path(path) if base is None or Path(path).is_absolute() else base / path
     task, family, actuation, genome, _ = load_controller(full)
-    return Part(name or Path(path).stem, str(path), task, family, actuation, genome)
+    return Part(name or Path(path).stem, str(full.resolve()), task, family, actuation, genome)
 
 
 def from_controllers(paths, switches=None, seconds=None, scene: dict | None = None, names=None) -> Composite:
@@ -197,8 +197,12 @@ def _from_obj(obj: dict, base: Path) -> Composite:
 
 
 def to_obj(comp: Composite, base: Path | None = None) -> dict:
+    """The file's object; controller paths relative to ``base`` (absolute without one)."""
+    import os
+
     from ..records import envelope
-    phases = [{"name": p.name, "controller": p.source} for p in comp.parts]
+    phases = [{"name": p.name, "controller": p.source if base is None else os.path.relpath(p.source, base)}
+              for p in comp.parts]
     obj = {"seconds": comp.seconds, "phases": phases, "switches": [float(s) for s in comp.switches]}
     if comp.scene_settings is not None:
         obj["scene"] = comp.scene_settings
@@ -206,9 +210,9 @@ def to_obj(comp: Composite, base: Path | None = None) -> dict:
 
 
 def save(path, comp: Composite) -> None:
-    """Write atomically.  Controller paths are written as given: relative ones stay relative to the file."""
+    """Write atomically; controller paths are written relative to the file's folder."""
     from ..records import atomic_write_json
-    atomic_write_json(path, to_obj(comp))
+    atomic_write_json(path, to_obj(comp, Path(path).resolve().parent))
 
 
 # ---------------------------------------------------------------- running

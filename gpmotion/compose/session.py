@@ -8,8 +8,8 @@
     OUT/result.json       gpmotion-compose-result: careless and best scores, per-phase credits
 
 ``resume=True`` continues from the checkpoint to exactly the result of an
-uninterrupted search (the config must be the same).  Controller paths in the
-written composites are absolute, so they stay valid wherever OUT is.
+uninterrupted search (the config must be the same: config.json names the
+controllers by absolute path; the composites in OUT name them relative to OUT).
 """
 from __future__ import annotations
 
@@ -32,19 +32,12 @@ def _config(comp: C.Composite, script_text: str, Q: int, G: int, H: int, seed: i
             "perturb": perturb}
 
 
-def _absolute(comp: C.Composite) -> C.Composite:
-    parts = [C.Part(p.name, str(Path(p.source).resolve()), p.task, p.family, p.actuation, p.genome)
-             for p in comp.parts]
-    return C.Composite(parts, comp.switches, comp.seconds, comp.scene, comp.scene_settings)
-
-
 def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int = 16, H: int = 4,
                 seed: int = 0, perturb: float | None = None, resume: bool = False,
                 log=print, stop_after_rounds: int | None = None) -> dict | None:
     """Run (or resume) the search into ``out``; return the result dict (None if stopped early)."""
     out = Path(out)
     script = S.parse(script_text)
-    comp = _absolute(comp)
     optimize.check_match(comp, script)
     config = envelope("compose-config", _config(comp, script_text, Q, G, H, seed, perturb))
     state = None
