@@ -47,8 +47,18 @@ def write_module(stem: str, source: str) -> Path:
 
 
 def import_file(path: str | Path):
-    """Import a module from a file path (once per process)."""
+    """Import a module from a file path (once per process).
+
+    A module of the gpmotion package itself (a BSR kernel) is imported under
+    its package name: numba's on-disk cache beside the file records the
+    module name, and an entry written under a second name cannot be loaded
+    by a process that imported the module normally (ModuleNotFoundError).
+    """
     path = Path(path)
+    package = Path(__file__).resolve().parent
+    if package in path.resolve().parents:
+        rel = path.resolve().relative_to(package.parent).with_suffix("")
+        return importlib.import_module(".".join(rel.parts))
     name = "gpmotion_cache_" + path.stem
     if name in sys.modules:
         return sys.modules[name]

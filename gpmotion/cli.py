@@ -52,6 +52,8 @@ def _add_run_args(p):
     p.add_argument("--reseed-every", type=int, help="serial search: reseeding interval (default 200)")
     p.add_argument("--rules", type=int, help="BSR rules per controller")
     p.add_argument("--t-per", type=float, help="time-based BSR period (s; default: episode length)")
+    p.add_argument("--segments", choices=["equal", "variable"],
+                   help="time-based BSR: equal segments of t_per (default) or evolved dividers")
     p.add_argument("--actuation", choices=["pd", "kinematic"], help="default: the family's own")
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
                    help="task parameter; VALUE may be a comma list to run a series")
@@ -184,7 +186,7 @@ def _run_configs(args):
                "max_size": args.max_size} if gp else
               {"n_working": args.working, "n_generations": args.generations,
                "reseed_every": args.reseed_every})
-    fam = {} if gp else {"rules": args.rules, "t_per": args.t_per}
+    fam = {} if gp else {"rules": args.rules, "t_per": args.t_per, "segments": args.segments}
     values = next(iter(series.values())) if series else [None]
     key = next(iter(series)) if series else None
     for seed in range(args.seed, args.seed + args.seeds):
