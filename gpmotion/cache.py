@@ -53,13 +53,16 @@ def import_file(path: str | Path):
     its package name: numba's on-disk cache beside the file records the
     module name, and an entry written under a second name cannot be loaded
     by a process that imported the module normally (ModuleNotFoundError).
+    The old alias stays registered, so entries an older version wrote load.
     """
     path = Path(path)
+    name = "gpmotion_cache_" + path.stem
     package = Path(__file__).resolve().parent
     if package in path.resolve().parents:
         rel = path.resolve().relative_to(package.parent).with_suffix("")
-        return importlib.import_module(".".join(rel.parts))
-    name = "gpmotion_cache_" + path.stem
+        module = importlib.import_module(".".join(rel.parts))
+        sys.modules.setdefault(name, module)
+        return module
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, path)

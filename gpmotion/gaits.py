@@ -35,7 +35,9 @@ Classes, checked in this order (the first that holds wins):
 episode repeat itself: the root-mean-square difference between the state
 at t and at t + L is ≤ 0.15 rad in every joint angle and in the unwrapped
 root pitch (so net rotation is never periodic) and ≤ 0.03 m in centre-of-mass
-height, and the set of points down agrees in ≥ 80 % of the frame pairs.
+height, and the set of points down agrees in ≥ 80 % of the frame pairs;
+and it is a motion, not a still pose: some joint angle sweeps ≥ 0.2 rad in
+the second half.
 """
 from __future__ import annotations
 
@@ -50,6 +52,7 @@ PERIOD_RANGE = (0.1, 1.0 / 3.0)   # lag: seconds (lower), fraction of T (upper)
 PERIOD_ANGLE_RMS = 0.15     # rad
 PERIOD_HEIGHT_RMS = 0.03    # m
 PERIOD_CONTACT_AGREE = 0.8
+PERIOD_MIN_SWEEP = 0.2      # rad: a still pose repeats at every lag
 
 GAITS = ("cartwheel", "tumble", "hop", "periodic shuffle", "shuffle", "other")
 
@@ -89,6 +92,8 @@ def _switches(hands: np.ndarray, feet: np.ndarray) -> int:
 def _period(frame_dt, angles, pitch, height, down) -> float | None:
     """Shortest lag at which the second half of the episode repeats itself."""
     n = angles.shape[0]
+    if np.ptp(angles[n // 2:], axis=0).max() < PERIOD_MIN_SWEEP:
+        return None
     state = np.column_stack([angles, pitch])
     lo = max(1, int(np.ceil(PERIOD_RANGE[0] / frame_dt - 1e-9)))
     hi = int(n * PERIOD_RANGE[1])

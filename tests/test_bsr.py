@@ -401,3 +401,11 @@ def test_rollouts_import_the_kernels_under_their_package_names():
     from gpmotion import cache
     assert cache.import_file(G.SENSE_KERNEL) is sense_kernel
     assert cache.import_file(G.TIME_KERNEL) is time_kernel
+
+
+def test_the_old_kernel_alias_still_resolves():
+    import sys
+
+    from gpmotion import cache
+    cache.import_file(G.SENSE_KERNEL)
+    assert sys.modules["gpmotion_cache_sense_kernel"] is sense_kernel

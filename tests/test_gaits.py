@@ -127,6 +127,13 @@ def test_periodic_shuffle_finds_its_period():
     assert f2.period is None and gaits.classify(f2) == "shuffle"
 
 
+def test_a_still_pose_sliding_along_is_no_periodic_shuffle():
+    t = frames()
+    f = feat(t, forces(t, lambda i: ("foot_l", "foot_r")), np.pi / 2 + 0 * t, 0.3 * t,
+             0.4 + 0 * t, np.ones((t.size, 4)))
+    assert f.period is None and gaits.classify(f) == "shuffle"
+
+
 def test_no_travel_is_other():
     t = frames()
     f = feat(t, forces(t, lambda i: ("foot_l", "foot_r")), np.pi / 2 + 0 * t, 0.05 * t / T,

@@ -1,4 +1,5 @@
 """Kernel for the *time-based* BSR controller (Auslander et al. §2.3, Fig. 4).
+(Rollouts import it under its package name: gpmotion.cache.import_file.)
 
 The sole "sense" is elapsed time.  A user-chosen period t_per is split into
 R equal segments; rule r is active while
