@@ -409,3 +409,14 @@ def test_the_old_kernel_alias_still_resolves():
     from gpmotion import cache
     cache.import_file(G.SENSE_KERNEL)
     assert sys.modules["gpmotion_cache_sense_kernel"] is sense_kernel
+
+
+def test_starman_senses_are_table1_with_the_hub():
+    # Table 1: V = 2N + 2 for N rods; Star-Man's 5 rods have 6 endpoints
+    # (five tips and the shared hub), so a sense-based rule has (5N + 4) = 29 parameters
+    from gpmotion import load_figure
+    fig = load_figure("starman")
+    idx = G.table1_sense_indices(fig.sense_names)
+    assert len(idx) == 2 * 5 + 2 and "hub" in fig.contact_names
+    g = G.random_sense_genome(np.random.default_rng(0), 10, len(idx), fig.actuator_limits(), 0.05, 3.0)
+    assert g.n_parameters == (5 * 5 + 4) * 10
