@@ -1,6 +1,5 @@
 """Shared by the travel tasks: Auslander's primary term (horizontal distance
 of the centre of mass) plus the Table 3 secondary terms, and a gait report."""
-
 from gpmotion import gaits
 from gpmotion.bsr import secondary
 from gpmotion.sim import geometry
