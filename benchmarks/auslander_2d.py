@@ -19,8 +19,12 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-contact    + contact_distance                        [shuffle]
   star-rotations  + rotations                               [cartwheel]
   star-height     + max_height                              [hop]
-  beryl-tumble    Beryl, time-based, t_per = T              [tumble, Fig. 11]
-  beryl-periodic  Beryl, time-based, t_per << T             [periodic shuffle, Fig. 12]
+  beryl-tumble    Beryl, time-based, t_per = T, + rotations              [tumble, Fig. 11]
+  beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
+  beryl-*-unguided  the same two without a secondary term (the paper names none for
+                  Beryl; unguided, our Beryl hops)
+Runs are queued seed-major (every configuration's seed 0 first), so a study
+cut short still has the first seeds of every configuration.
 """
 from __future__ import annotations
 
@@ -48,9 +52,15 @@ CONFIGS = {
                        "Star-Man time-based + rotations"),
     "star-height": ("starman_travel", "bsr-time", {"w_max_height": 2.0}, {}, ("hop",),
                     "Star-Man time-based + max_height"),
-    "beryl-tumble": ("beryl_travel", "bsr-time", {}, {}, ("tumble",), "Beryl time-based, t_per = T"),
-    "beryl-periodic": ("beryl_travel", "bsr-time", {}, {"t_per": 0.5}, ("periodic shuffle",),
-                       "Beryl time-based, t_per = 0.5 s"),
+    "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 0.5}, {}, ("tumble",),
+                     "Beryl time-based, t_per = T, + rotations"),
+    "beryl-periodic": ("beryl_travel", "bsr-time", {"w_contact_distance": 0.5}, {"t_per": 0.5},
+                       ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, + contact_distance"),
+    # the paper's Beryl configurations name no secondary term; unguided, ours hops
+    "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
+                              "Beryl time-based, t_per = T, unguided"),
+    "beryl-periodic-unguided": ("beryl_travel", "bsr-time", {}, {"t_per": 0.5},
+                                ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, unguided"),
 }
 WORKING, RESEED = 10, 200
 
@@ -176,7 +186,7 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     results = load_results(out, args.budget)
-    todo = [(n, s, args.budget, str(out)) for n in names for s in seeds if (n, s) not in results]
+    todo = [(n, s, args.budget, str(out)) for s in seeds for n in names if (n, s) not in results]
     if todo:
         with mp.get_context("spawn").Pool(min(args.workers, len(todo))) as pool:
             for rec in pool.imap_unordered(_job, todo):
