@@ -420,3 +420,16 @@ def test_starman_senses_are_table1_with_the_hub():
     assert len(idx) == 2 * 5 + 2 and "hub" in fig.contact_names
     g = G.random_sense_genome(np.random.default_rng(0), 10, len(idx), fig.actuator_limits(), 0.05, 3.0)
     assert g.n_parameters == (5 * 5 + 4) * 10
+
+
+def test_starman_legs_can_swing_over_the_top():
+    # a cartwheel carries the legs past the horizontal towards the head
+    from gpmotion import load_figure
+    fig = load_figure("starman")
+    names = fig.actuator_names
+    lim = fig.actuator_limits()
+    offsets = {"leg_l": 2.7416, "leg_r": -2.7416}            # rest angles from the head rod
+    for leg, rest in offsets.items():
+        lo, hi = lim[names.index(leg)]
+        reach = min(abs(rest + lo), abs(rest + hi))          # closest approach to the head
+        assert reach < 0.5, (leg, reach)
