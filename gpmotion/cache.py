@@ -47,9 +47,22 @@ def write_module(stem: str, source: str) -> Path:
 
 
 def import_file(path: str | Path):
-    """Import a module from a file path (once per process)."""
+    """Import a module from a file path (once per process).
+
+    A module of the gpmotion package itself (a BSR kernel) is imported under
+    its package name: numba's on-disk cache beside the file records the
+    module name, and an entry written under a second name cannot be loaded
+    by a process that imported the module normally (ModuleNotFoundError).
+    The old alias stays registered, so entries an older version wrote load.
+    """
     path = Path(path)
     name = "gpmotion_cache_" + path.stem
+    package = Path(__file__).resolve().parent
+    if package in path.resolve().parents:
+        rel = path.resolve().relative_to(package.parent).with_suffix("")
+        module = importlib.import_module(".".join(rel.parts))
+        sys.modules.setdefault(name, module)
+        return module
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, path)

@@ -131,6 +131,9 @@ OPTIONS: list[Option] = [
     Option("--t-per", "family", {"bsr-time": "t_per"},
            "time-based BSR period in s (default: the episode length)",
            "the period of time-based BSR rules", dict(type=float), _number(1e-3, 1e3)),
+    Option("--segments", "family", {"bsr-time": "segments"},
+           "time-based BSR segments: equal parts of t_per (default) or variable (evolved dividers)",
+           "the segment durations of time-based BSR rules", dict(choices=["equal", "variable"])),
 ]
 
 

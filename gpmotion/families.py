@@ -139,15 +139,21 @@ class BSRTimeFamily(BSRFamily):
     name = "bsr-time"
     kind = "time"
 
-    def __init__(self, task, rules=None, t_per=None, **options):
-        super().__init__(task, rules=rules or 4, t_per=t_per or task.seconds, **options)
+    def __init__(self, task, rules=None, t_per=None, segments="equal", **options):
+        # segments: "equal" (R equal parts of t_per) or "variable" (the paper's
+        # R − 1 dividers per period, evolved with the rules)
+        super().__init__(task, rules=rules or 4, t_per=t_per or task.seconds,
+                         segments=segments, **options)
         self.sense_indices = None
         if not 0 < float(self.options["t_per"]) <= 1e3:
             raise ValueError(f"t_per must be in (0, 1000] s, got {t_per}")
+        if segments not in ("equal", "variable"):
+            raise ValueError(f"segments must be 'equal' or 'variable', got {segments!r}")
 
     def random(self, rng):
         return bsr_genome.random_time_genome(rng, self.options["rules"], self.limits, self.bsr_dt,
-                                             self.task.seconds, float(self.options["t_per"]))
+                                             self.task.seconds, float(self.options["t_per"]),
+                                             self.options["segments"])
 
 
 FAMILIES = {f.name: f for f in (GPFamily, BSRSenseFamily, BSRTimeFamily)}

@@ -1,7 +1,6 @@
 """Shared by the travel tasks: Auslander's primary term (horizontal distance
 of the centre of mass) plus the Table 3 secondary terms, and a gait report."""
-import numpy as np
-
+from gpmotion import gaits
 from gpmotion.bsr import secondary
 from gpmotion.sim import geometry
 from gpmotion.task import Task, Term
@@ -28,21 +27,11 @@ def travel_measures(traj):
 
 
 def gait(traj, m, e=0):
-    """Name the motion found: cartwheel, hop, shuffle, or crawl/tumble."""
-    airborne = (traj.contact_force[e].max(axis=1) == 0).mean()
-    d = m["distance"][e]
-    if m["rotations"][e] >= 1.0:
-        kind = "cartwheel/tumble"
-    elif airborne > 0.15:
-        kind = "hop"
-    elif m["contact_distance"][e] > 0.5 * abs(d):
-        kind = "shuffle"
-    else:
-        kind = "crawl"
+    """Name the motion found by gpmotion.gaits' definitions, with its evidence."""
+    name, f = gaits.gait_of(traj, e)
     contacts = (traj.contact_force[e] > 0).mean(axis=0)
     pattern = ", ".join(f"{n} {100 * c:.0f}%" for n, c in zip(traj.figure.contact_names, contacts))
-    return [f"gait: {kind}", f"distance {d:.2f} m", f"rotations {m['rotations'][e]:.2f}",
-            f"airborne {100 * airborne:.0f}% of frames", f"slid {m['contact_distance'][e]:.2f} m",
+    return [f"gait: {name}", *f.lines(), f"slid {m['contact_distance'][e]:.2f} m",
             f"contact time: {pattern}"]
 
 

@@ -337,3 +337,99 @@ def test_table1_indices_and_normalized_trajectory():
     y = M.normalized_sense_trajectory(raw, lo, hi, [0, 1, 9])
     assert y.shape == (2, 5, 3)
     np.testing.assert_allclose(y[0, 0], [0.5, 0.125, 1.0])
+
+
+# -- variable segment durations (the paper's R − 1 dividers) ---------------------------
+def test_variable_segments_follow_their_durations():
+    rng = np.random.default_rng(4)
+    g = G.random_time_genome(rng, 4, LIMITS3, 0.01, 2.0, t_per=0.8, segments="variable")
+    assert g.durations.shape == (4,) and g.n_parameters == 4 * 3 + 4 + 3
+    g.durations = np.array([1.0, 3.0, 0.5, 0.5])             # segments 0.16, 0.48, 0.08, 0.08 s
+    edges = np.array([0.0, 0.16, 0.64, 0.72, 0.8])
+    batch = G.encode_batch([g], None, 3)
+    cstate = np.zeros(batch.cstate_size)
+    for t in np.concatenate([rng.uniform(0, 3, 300), edges[1:-1] + 1e-9, edges[1:-1] + 0.8 + 1e-9]):
+        targets, taus = np.zeros(3), np.zeros(3)
+        time_kernel.control(batch.ci[0], batch.cf[0], targets, targets, t, cstate, targets, taus)
+        want = int(np.searchsorted(edges, t % 0.8, side="right")) - 1
+        assert cstate[0] == want, t
+        np.testing.assert_array_equal(targets, g.theta0[want])
+        assert np.all(taus == g.tau[want])
+
+
+def test_equal_durations_match_equal_segments():
+    rng = np.random.default_rng(5)
+    g = G.random_time_genome(rng, 5, LIMITS3, 0.01, 2.0, t_per=1.0)
+    assert g.durations is None and g.n_parameters == 5 * 3 + 5
+    v = g.copy()
+    v.durations = np.ones(5)
+    be, bv = G.encode_batch([g], None, 3), G.encode_batch([v], None, 3)
+    for t in rng.uniform(0, 4, 300):
+        c1, c2 = np.zeros(1), np.zeros(1)
+        x = np.zeros(3)
+        time_kernel.control(be.ci[0], be.cf[0], x, x, t, c1, np.zeros(3), np.zeros(3))
+        time_kernel.control(bv.ci[0], bv.cf[0], x, x, t, c2, np.zeros(3), np.zeros(3))
+        assert c1[0] == c2[0]
+
+
+def test_variable_segments_mutate_and_round_trip():
+    rng = np.random.default_rng(6)
+    g = G.random_time_genome(rng, 4, LIMITS3, 0.01, 2.0, 1.0, segments="variable")
+    h = M.creep_rule(g, rng, rule=2)
+    assert (h.durations != g.durations).tolist() == [False, False, True, False]
+    h = M.reinit_rule(h, rng, rule=0)
+    assert h.durations[0] != g.durations[0] and h.durations[1] == g.durations[1]
+    for _ in range(300):
+        h = M.mutate(M.creep_rule(h, rng, scale=30.0), rng)
+    back = G.genome_from_dict(json.loads(json.dumps(h.to_dict())))
+    np.testing.assert_array_equal(back.durations, h.durations)
+    assert "durations" not in G.random_time_genome(rng, 2, LIMITS3, .01, 2., 1.).to_dict()
+    d = g.to_dict()
+    d["durations"] = [1.0, 1.0]
+    with pytest.raises(ValueError, match="durations"):
+        G.genome_from_dict(d)
+    d["durations"] = [1.0, 1.0, 0.0, 1.0]
+    with pytest.raises(ValueError, match="durations"):
+        G.genome_from_dict(d)
+    with pytest.raises(ValueError, match="segments"):
+        G.random_time_genome(rng, 2, LIMITS3, .01, 2., 1., segments="uneven")
+
+
+def test_rollouts_import_the_kernels_under_their_package_names():
+    # numba's cache beside the file records the module name: a kernel compiled
+    # by a rollout under another name broke later direct imports of the kernel
+    from gpmotion import cache
+    assert cache.import_file(G.SENSE_KERNEL) is sense_kernel
+    assert cache.import_file(G.TIME_KERNEL) is time_kernel
+
+
+def test_the_old_kernel_alias_still_resolves():
+    import sys
+
+    from gpmotion import cache
+    cache.import_file(G.SENSE_KERNEL)
+    assert sys.modules["gpmotion_cache_sense_kernel"] is sense_kernel
+
+
+def test_starman_senses_are_table1_with_the_hub():
+    # Table 1: V = 2N + 2 for N rods; Star-Man's 5 rods have 6 endpoints
+    # (five tips and the shared hub), so a sense-based rule has (5N + 4) = 29 parameters
+    from gpmotion import load_figure
+    fig = load_figure("starman")
+    idx = G.table1_sense_indices(fig.sense_names)
+    assert len(idx) == 2 * 5 + 2 and "hub" in fig.contact_names
+    g = G.random_sense_genome(np.random.default_rng(0), 10, len(idx), fig.actuator_limits(), 0.05, 3.0)
+    assert g.n_parameters == (5 * 5 + 4) * 10
+
+
+def test_starman_legs_can_swing_over_the_top():
+    # a cartwheel carries the legs past the horizontal towards the head
+    from gpmotion import load_figure
+    fig = load_figure("starman")
+    names = fig.actuator_names
+    lim = fig.actuator_limits()
+    offsets = {"leg_l": 2.7416, "leg_r": -2.7416}            # rest angles from the head rod
+    for leg, rest in offsets.items():
+        lo, hi = lim[names.index(leg)]
+        reach = min(abs(rest + lo), abs(rest + hi))          # closest approach to the head
+        assert reach < 0.5, (leg, reach)

@@ -28,6 +28,8 @@ from gpmotion.controllers import ControllerBatch
 LAMBDA_MIN = 2.0 / 4.0          # smallest allowable λ (largest side 4)
 LAMBDA_MAX = 2.0 / 0.4          # largest λ (smallest side 0.4)
 MU_INIT = (-0.5, 1.5)
+DURATION_INIT = (0.5, 2.0)      # variable segments: relative durations, log-uniform
+DURATION_BOUNDS = (0.1, 10.0)   # valid range of a relative duration
 MU_BOUNDS = (-2.0, 3.0)
 MAX_RULES = 10_000              # caps for untrusted files
 MAX_WIDTH = 10_000
@@ -177,12 +179,21 @@ class SenseGenome:
 
 @dataclass(eq=False)
 class TimeGenome:
-    """Time-based controller: segment r of period t_per → (θ₀[r], τ[r])."""
+    """Time-based controller: segment r of period t_per → (θ₀[r], τ[r]).
+
+    ``durations`` None: R equal segments (the default).  Otherwise float[R]
+    relative durations d_r: segment r lasts d_r / Σd of t_per, so the
+    controller has the paper's R − 1 free dividers per period (§4.1), held
+    as one duration per rule so that creep and reinitialization of a rule
+    move its segment's length too (footnote 6: N + 1 parameters per rule,
+    θ₀ for N − 1 joints, τ and the duration).
+    """
     theta0: np.ndarray      # float64[R, n_act]
     tau: np.ndarray         # float64[R]
     t_per: float            # period, seconds (set by the user, not evolved)
     limits: np.ndarray      # float64[n_act, 2]
     tau_range: np.ndarray   # float64[2]
+    durations: np.ndarray | None = None   # float64[R] relative, or None: equal
 
     kind = "time"
 
@@ -196,28 +207,46 @@ class TimeGenome:
         if not t_per > 0.0:
             raise ValueError(f"t_per must be > 0, got {float(t_per)}")
         self.t_per = float(t_per)
+        if self.durations is not None:
+            self.durations = _array("durations", self.durations, 1)
+            if self.durations.shape != self.tau.shape:
+                raise ValueError(f"durations: expected shape {self.tau.shape}, "
+                                 f"got {self.durations.shape}")
+            _in_range("durations", self.durations, *DURATION_BOUNDS)
 
     n_rules = property(lambda self: self.theta0.shape[0])
     n_act = property(lambda self: self.theta0.shape[1])
 
     @property
     def n_parameters(self) -> int:
-        """(n_act + 1)R: θ₀ per joint and one τ per segment."""
-        return self.theta0.size + self.tau.size
+        """(n_act + 1)R: θ₀ per joint and one τ per segment (+ R − 1 dividers
+        with variable segments)."""
+        extra = 0 if self.durations is None else self.n_rules - 1
+        return self.theta0.size + self.tau.size + extra
+
+    def boundaries(self) -> np.ndarray:
+        """The R − 1 inner segment ends as fractions of t_per (empty: equal)."""
+        if self.durations is None:
+            return np.zeros(0)
+        c = np.cumsum(self.durations)
+        return c[:-1] / c[-1]
 
     def copy(self) -> "TimeGenome":
         return _trusted_copy(self)
 
     def to_dict(self) -> dict:
-        return {"format": TIME_FORMAT, "theta0": self.theta0.tolist(),
-                "tau": self.tau.tolist(), "t_per": self.t_per,
-                "limits": self.limits.tolist(), "tau_range": self.tau_range.tolist()}
+        d = {"format": TIME_FORMAT, "theta0": self.theta0.tolist(),
+             "tau": self.tau.tolist(), "t_per": self.t_per,
+             "limits": self.limits.tolist(), "tau_range": self.tau_range.tolist()}
+        if self.durations is not None:
+            d["durations"] = self.durations.tolist()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "TimeGenome":
         keys = ("theta0", "tau", "t_per", "limits", "tau_range")
         _expect_dict(d, TIME_FORMAT, keys)
-        return cls(*(d[k] for k in keys))
+        return cls(*(d[k] for k in keys), durations=d.get("durations"))
 
 
 def genome_from_dict(d: dict) -> SenseGenome | TimeGenome:
@@ -273,13 +302,22 @@ def random_sense_genome(rng: np.random.Generator, n_rules: int, n_senses: int,
 
 
 def random_time_genome(rng: np.random.Generator, n_rules: int, limits,
-                       dt: float, T: float, t_per: float) -> TimeGenome:
-    """A random time-based controller (responses from Table 2)."""
+                       dt: float, T: float, t_per: float,
+                       segments: str = "equal") -> TimeGenome:
+    """A random time-based controller (responses from Table 2).
+
+    ``segments="variable"``: relative durations log-uniform in DURATION_INIT
+    (the paper gives no distribution; segments from 1/4 to 4 times another),
+    drawn after the responses so equal-segment genomes are unchanged.
+    """
+    if segments not in ("equal", "variable"):
+        raise ValueError(f"segments must be 'equal' or 'variable', got {segments!r}")
     lo, hi = tau_bounds(dt, T)
     limits = np.asarray(limits, dtype=np.float64)
     theta0 = random_theta0(rng, limits, n_rules)
     tau = log_uniform(rng, lo, hi, n_rules)
-    return TimeGenome(theta0, tau, t_per, limits, np.array([lo, hi]))
+    durations = log_uniform(rng, *DURATION_INIT, n_rules) if segments == "variable" else None
+    return TimeGenome(theta0, tau, t_per, limits, np.array([lo, hi]), durations)
 
 
 def encode_batch(genomes, sense_indices=None, n_act: int | None = None
@@ -322,9 +360,9 @@ def encode_batch(genomes, sense_indices=None, n_act: int | None = None
     else:
         from gpmotion.bsr.time_kernel import CSTATE_SIZE
         for g in genomes:
-            rows_i.append(np.array([g.n_rules, n_act]))
+            rows_i.append(np.array([g.n_rules, n_act, g.durations is not None]))
             rows_f.append(np.concatenate(
-                [[g.t_per], np.hstack([g.tau[:, None], g.theta0]).ravel()]))
+                [[g.t_per], np.hstack([g.tau[:, None], g.theta0]).ravel(), g.boundaries()]))
         module, cstate_size = TIME_KERNEL, CSTATE_SIZE
     ci = np.zeros((len(genomes), max(r.size for r in rows_i)), dtype=np.int64)
     cf = np.zeros((len(genomes), max(r.size for r in rows_f)), dtype=np.float64)

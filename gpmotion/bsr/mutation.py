@@ -18,14 +18,18 @@ Choices the paper leaves open (documented, overridable):
   controller reads (``senses_norm[sense_indices]``) at every recorded frame.
   Non-finite frames are skipped; with no usable trajectory the stimulus is
   drawn from Table 2 instead.
-Time-based genomes mutate the same way, minus the stimulus.
+Time-based genomes mutate the same way, minus the stimulus; with variable
+segments the rule's relative duration creeps like τ (× exp(N(0, 0.1))) and
+is redrawn from DURATION_INIT on reinitialization, so the R − 1 dividers
+move with the search.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from gpmotion.bsr.genome import (LAMBDA_MAX, LAMBDA_MIN, MU_BOUNDS, SenseGenome,
-                                 log_uniform, random_stimulus, random_theta0)
+from gpmotion.bsr.genome import (DURATION_BOUNDS, DURATION_INIT, LAMBDA_MAX, LAMBDA_MIN,
+                                 MU_BOUNDS, SenseGenome, log_uniform, random_stimulus,
+                                 random_theta0)
 
 P_REINIT = 1.0 / 3.0
 CREEP = {"mu": 0.05, "log_side": 0.1, "theta_frac": 0.05, "log_tau": 0.1}
@@ -78,6 +82,9 @@ def creep_rule(genome, rng: np.random.Generator, rule: int | None = None,
                           * CREEP["theta_frac"] * scale * (hi - lo), lo, hi)
     g.tau[r] = np.clip(g.tau[r] * np.exp(rng.normal(0.0, CREEP["log_tau"] * scale)),
                        g.tau_range[0], g.tau_range[1])
+    if getattr(g, "durations", None) is not None:
+        g.durations[r] = np.clip(g.durations[r] * np.exp(
+            rng.normal(0.0, CREEP["log_tau"] * scale)), *DURATION_BOUNDS)
     if isinstance(g, SenseGenome):
         g.mu[r] = np.clip(g.mu[r] + rng.normal(0.0, CREEP["mu"] * scale, g.n_senses),
                           *MU_BOUNDS)
@@ -94,6 +101,8 @@ def reinit_rule(genome, rng: np.random.Generator, rule: int | None = None,
     r = int(rng.integers(g.n_rules)) if rule is None else rule
     g.theta0[r] = random_theta0(rng, g.limits, 1)[0]
     g.tau[r] = log_uniform(rng, g.tau_range[0], g.tau_range[1])
+    if getattr(g, "durations", None) is not None:
+        g.durations[r] = log_uniform(rng, *DURATION_INIT)
     if isinstance(g, SenseGenome):
         box = None if trajectory is None else relevant_stimulus(rng, trajectory)
         if box is not None and box[0].size != g.n_senses:

@@ -1,4 +1,5 @@
 """Kernel for the *sense-based* BSR controller (Auslander et al. §2.1.2).
+(Rollouts import it under its package name: gpmotion.cache.import_file.)
 
 A controller is a bank of R stimulus-response rules.  Rule j has a stimulus
 hyperrectangle (centre μ_j, sharpness λ_j, one value per sense, side length

@@ -1,4 +1,5 @@
 """Kernel for the *time-based* BSR controller (Auslander et al. §2.3, Fig. 4).
+(Rollouts import it under its package name: gpmotion.cache.import_file.)
 
 The sole "sense" is elapsed time.  A user-chosen period t_per is split into
 R equal segments; rule r is active while
@@ -13,13 +14,17 @@ Reconciling with the paper: footnote 6 says N+1 parameters per rule for an
 N-rod figure, which has N−1 joints; θ₀ + τ is only N.  The paper's 3-D count
 (§4.1: "R−1 independent variables to divide up each period", total 2NR − 1)
 shows the extra per-rule parameter is the segment's *duration*.  We follow
-the brief and use equal segments, so a rule has (N−1) + 1 = N parameters in
-the paper's rod count = n_act + 1 in ours.  Variable durations would add R−1
-parameters and a boundary search here.
+equal segments by default, so a rule has (N−1) + 1 = N parameters in the
+paper's rod count = n_act + 1 in ours.  With variable segments
+(``TimeGenome.durations``, an option) each rule also has a relative
+duration, the paper's R − 1 dividers per period; rule r is then active
+while the phase fraction (t mod t_per)/t_per lies in [b_{r−1}, b_r) with
+b_{−1} = 0, b_{R−1} = 1.
 
 Program layout (see ``encode_batch``)
-  ci = [R, n_act]
-  cf = [t_per, then R blocks of [τ, θ₀_0 .. θ₀_{n_act-1}]]
+  ci = [R, n_act, variable (0/1)]
+  cf = [t_per, then R blocks of [τ, θ₀_0 .. θ₀_{n_act-1}],
+        then (variable) the R − 1 inner boundaries b_0 < .. < b_{R−2}]
   cstate = [active rule]                      (CSTATE_SIZE = 1)
 """
 from __future__ import annotations
@@ -49,10 +54,23 @@ def segment(t, t_per, n_rules):
 
 
 @njit(cache=True)
+def variable_segment(t, t_per, cf, first, n_rules):
+    """Active rule with boundaries cf[first : first + R − 1] (fractions of t_per)."""
+    frac = (t - t_per * math.floor(t / t_per)) / t_per
+    r = 0
+    while r < n_rules - 1 and frac >= cf[first + r]:
+        r += 1
+    return r
+
+
+@njit(cache=True)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules = ci[0]
     n_act = ci[1]
-    r = segment(t, cf[0], n_rules)
+    if ci[2] != 0:
+        r = variable_segment(t, cf[0], cf, 1 + n_rules * (n_act + 1), n_rules)
+    else:
+        r = segment(t, cf[0], n_rules)
     cstate[0] = r
     base = 1 + r * (n_act + 1)
     tau = cf[base]

@@ -1,4 +1,5 @@
 """Kernel module of the `schedule` family: open-loop targets over time.
+(Rollouts import it under its package name: gpmotion.cache.import_file.)
 
 Used by ``gpmotion.simulate``, the benchmark and tests.  ``ci = [mode, n_keys]``:
 

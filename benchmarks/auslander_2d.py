@@ -1,0 +1,212 @@
+"""Auslander et al.'s 2-D results, reproduced with rates: which gait does each
+configuration of §2.2–2.3 find, over seeds?
+
+Every run is the paper's serial search (Fig. 3: C = 10 working controllers,
+reseeding every 200 rounds) for ``--budget`` evaluations (default 40,000 =
+C × G with G = 4,000), kinematic actuation (the paper's τ-law), then the
+best controller's motion is classified by :mod:`gpmotion.gaits`.  Prints a
+table of gait counts per configuration (and the distance travelled), writes
+one filmstrip per gait found to ``--docs`` and every run's best controller
+and features to ``--out`` (``results.jsonl``: finished runs are skipped when
+the command is repeated, so an interrupted study resumes).
+
+    python benchmarks/auslander_2d.py [--seeds 5] [--budget 40000]
+        [--configs star-contact,beryl-tumble] [--workers 2] [--out DIR] [--docs DIR]
+
+Configurations (``CONFIGS``; the paper's expected gait in brackets):
+  star-sense      Star-Man, sense-based, R = 10, unguided   [shuffle, Figs. 9-10]
+  star-time       Star-Man, time-based, unguided
+  star-contact    + contact_distance                        [shuffle]
+  star-rotations  + rotations                               [cartwheel]
+  star-height     + max_height                              [hop]
+  beryl-tumble    Beryl, time-based, t_per = T, + rotations              [tumble, Fig. 11]
+  beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
+  beryl-*-unguided  the same two without a secondary term (the paper names none for
+                  Beryl; unguided, our Beryl hops)
+Runs are queued seed-major (every configuration's seed 0 first), so a study
+cut short still has the first seeds of every configuration.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import os
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# name: (task, family, task params, family options, expected gait(s), label)
+CONFIGS = {
+    "star-sense": ("starman_travel", "bsr-sense", {}, {"rules": 10}, ("shuffle", "periodic shuffle"),
+                   "Star-Man sense-based R=10, unguided"),
+    "star-time": ("starman_travel", "bsr-time", {}, {}, (), "Star-Man time-based, unguided"),
+    "star-contact": ("starman_travel", "bsr-time", {"w_contact_distance": 2.0}, {},
+                     ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance"),
+    "star-rotations": ("starman_travel", "bsr-time", {"w_rotations": 0.5}, {}, ("cartwheel",),
+                       "Star-Man time-based + rotations"),
+    "star-height": ("starman_travel", "bsr-time", {"w_max_height": 2.0}, {}, ("hop",),
+                    "Star-Man time-based + max_height"),
+    # Beryl: τ ≥ 0.2 s (bsr_dt 0.1), footnote 2's remedy for excessive torque;
+    # with τ ≥ 0.1 s its kinematic legs hopped 4-6 m in 3 s at weights 0.5 and 2
+    "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 2.0}, {"bsr_dt": 0.1}, ("tumble",),
+                     "Beryl time-based, t_per = T, + rotations"),
+    "beryl-periodic": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                       {"t_per": 0.5, "bsr_dt": 0.1},
+                       ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, + contact_distance"),
+    # the paper's Beryl configurations name no secondary term; unguided, ours hops
+    "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
+                              "Beryl time-based, t_per = T, unguided"),
+    "beryl-periodic-unguided": ("beryl_travel", "bsr-time", {}, {"t_per": 0.5},
+                                ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, unguided"),
+}
+WORKING, RESEED = 10, 200
+
+
+def _fail(msg: str) -> None:
+    print(f"auslander_2d: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def run_one(name: str, seed: int, budget: int, out: str) -> dict:
+    """One serial search of configuration ``name``; its best motion classified."""
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    from gpmotion import gaits
+    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.families import make_family
+    from gpmotion.replay import replay_genome
+    from gpmotion.search.adapters import make_search
+    from gpmotion.task import get_task
+    task_name, fam_name, params, options, _, _ = CONFIGS[name]
+    task = get_task(task_name, **params)
+    fam = make_family(fam_name, task, **options)
+    search = make_search(fam, seed, n_working=WORKING, n_generations=budget // WORKING - 1,
+                         reseed_every=RESEED)
+    ev = InProcessEvaluator(task, fam, threads=1)
+    ev.evaluate([fam.random(np.random.default_rng(seed))])           # compile / load the cache
+    t0, c0 = time.perf_counter(), time.process_time()
+    while not search.done:
+        genomes = search.ask()
+        search.tell(ev.evaluate(genomes, search.progress))
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, search.best)
+    gait, f = gaits.gait_of(traj)
+    rec = {"config": name, "seed": seed, "budget": budget, "evaluations": search.search.evaluations,
+           "gait": gait, "cost": float(costs[0]), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+           **{k: float(v[0]) for k, v in measures.items()},
+           "features": {k: v for k, v in f.__dict__.items()},
+           "task": task_name, "params": task.p, "family": fam_name, "options": fam.options,
+           "genome": fam.to_json(search.best)}
+    path = Path(out) / f"{name}-seed{seed}-{budget}.json"
+    path.write_text(json.dumps(rec))
+    return rec
+
+
+def _job(args):
+    return run_one(*args)
+
+
+def load_results(out: Path, budget: int) -> dict:
+    done = {}
+    for p in sorted(out.glob(f"*-{budget}.json")):
+        rec = json.loads(p.read_text())
+        done[(rec["config"], rec["seed"])] = rec
+    return done
+
+
+def table(results: dict, names, seeds) -> str:
+    from gpmotion.gaits import GAITS
+    head = ["configuration", "runs", *GAITS, "expected gait is the majority", "distance m (median [min, max])",
+            "wall s (median)"]
+    rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name in names:
+        recs = [results[(name, s)] for s in seeds if (name, s) in results]
+        if not recs:
+            continue
+        count = Counter(r["gait"] for r in recs)
+        expected = CONFIGS[name][4]
+        hit = sum(r["gait"] in expected for r in recs)
+        d = np.array([r["distance"] for r in recs])
+        verdict = f"{hit} / {len(recs)} ({' or '.join(expected)})" if expected else "—"
+        rows.append("| " + " | ".join([CONFIGS[name][5], str(len(recs)),
+                                       *(str(count.get(g, 0)) for g in GAITS), verdict,
+                                       f"{np.median(d):.2f} [{d.min():.2f}, {d.max():.2f}]",
+                                       f"{np.median([r['wall_s'] for r in recs]):.0f}"]) + " |")
+    return "\n".join(rows)
+
+
+def filmstrips(results: dict, docs: Path) -> list[str]:
+    """One filmstrip per gait found: the longest-travelling run of that gait,
+    preferring runs of a configuration that expects it."""
+    from gpmotion.families import make_family
+    from gpmotion.render3d import render_any
+    from gpmotion.replay import replay_genome
+    from gpmotion.task import get_task
+    best = {}
+    for rec in results.values():
+        key = (rec["gait"] in CONFIGS[rec["config"]][4], rec["distance"])
+        if rec["gait"] not in best or key > best[rec["gait"]][0]:
+            best[rec["gait"]] = (key, rec)
+    written = []
+    for gait, (_, rec) in sorted(best.items()):
+        if gait == "other":
+            continue
+        task = get_task(rec["task"], **rec["params"])
+        fam = make_family(rec["family"], task, **rec["options"])
+        traj = replay_genome(task, fam, fam.default_actuation, fam.from_json(rec["genome"]))[0]
+        path = docs / f"auslander_{task.figure}_{gait.replace(' ', '_')}.png"
+        render_any(traj, filmstrip=str(path),
+                   title=f"{gait}: {CONFIGS[rec['config']][5]}, seed {rec['seed']} "
+                         f"({rec['distance']:.2f} m)")
+        written.append(str(path))
+    return written
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--budget", type=int, default=40_000, help="evaluations per run (C × G)")
+    ap.add_argument("--configs", default=",".join(CONFIGS),
+                    help=f"comma list of {', '.join(CONFIGS)}")
+    ap.add_argument("--workers", type=int, default=1, help="processes (one numba thread each)")
+    ap.add_argument("--out", default="runs/auslander_2d")
+    ap.add_argument("--docs", default=None, help="write gait filmstrips here (e.g. docs)")
+    ap.add_argument("--json", action="store_true", help="print the results as JSON lines too")
+    args = ap.parse_args(argv)
+    names = [n.strip() for n in args.configs.split(",") if n.strip()]
+    unknown = [n for n in names if n not in CONFIGS]
+    if unknown:
+        _fail(f"unknown configuration(s) {unknown}; known: {', '.join(CONFIGS)}")
+    if args.seeds < 1 or args.workers < 1 or args.budget < 2 * WORKING:
+        _fail("need --seeds >= 1, --workers >= 1 and --budget >= 20")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    results = load_results(out, args.budget)
+    todo = [(n, s, args.budget, str(out)) for s in seeds for n in names if (n, s) not in results]
+    if todo:
+        with mp.get_context("spawn").Pool(min(args.workers, len(todo))) as pool:
+            for rec in pool.imap_unordered(_job, todo):
+                results[(rec["config"], rec["seed"])] = rec
+                print(f"{rec['config']} seed {rec['seed']}: {rec['gait']} {rec['distance']:.2f} m "
+                      f"({rec['wall_s']:.0f} s)", flush=True)
+    print(f"\n{args.budget:,} evaluations per run, seeds {seeds[0]}..{seeds[-1]}\n")
+    print(table(results, names, seeds))
+    if args.json:
+        for (n, s), rec in sorted(results.items()):
+            if n in names and s in seeds:
+                print(json.dumps({k: v for k, v in rec.items() if k != "genome"}))
+    if args.docs:
+        for p in filmstrips({k: v for k, v in results.items() if k[0] in names and k[1] in seeds},
+                            Path(args.docs)):
+            print("wrote", p)
+
+
+if __name__ == "__main__":
+    main()
