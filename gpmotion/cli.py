@@ -79,6 +79,9 @@ def parser() -> argparse.ArgumentParser:
     _add_run_args(sub.add_parser("run", help="evolve a controller for a task"))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
     p.add_argument("run_dir")
+    p.add_argument("--extend-generations", type=int, metavar="N",
+                   help="add N generations (rounds) to the run, finished or not; they run at "
+                        "the final weights of the style terms")
     p.add_argument("--quiet", action="store_true")
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
@@ -125,7 +128,7 @@ def main(argv=None) -> int:
         return COMMANDS[args.cmd](args) or 0
     except KeyboardInterrupt as e:
         print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
-        return 130
+        return getattr(e, "code", 130)
     except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
         if type(e).__name__ == "WorkerLost":
@@ -212,9 +215,13 @@ def _out_dir(args, seed, key, value) -> Path:
 
 
 def cmd_run(args):
-    from .run import run
+    from .run import build, run
+    configs = list(_run_configs(args))
+    if not args.resume:                 # every run of a series is valid before the first starts
+        for cfg, _ in configs:
+            build(cfg)
     results = []
-    for cfg, out in _run_configs(args):
+    for cfg, out in configs:
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
                              artifacts=not args.no_artifacts)
         results.append((out, cost, rd))
@@ -235,7 +242,8 @@ def _summary(rd):
 
 def cmd_resume(args):
     from .run import run
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet)
+    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet,
+                         extend_generations=args.extend_generations)
     _summary(rd)
 
 
