@@ -56,7 +56,8 @@ def test_killed_run_resumes_to_the_uninterrupted_result(tmp_path):
     ref, killed = tmp_path / "ref", tmp_path / "killed"
     assert main(["run", "lamp_hop", "--out", str(ref), *args]) == 0
     proc = subprocess.Popen([sys.executable, "-m", "gpmotion.cli", "run", "lamp_hop", "--out",
-                             str(killed), *args])
+                             str(killed), *args],
+                            env={**os.environ, "GPMOTION_CHECKPOINT_EVERY": "0"})
     log = killed / "log.csv"
     t0 = time.time()
     while time.time() - t0 < 120:
