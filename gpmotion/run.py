@@ -34,6 +34,7 @@ from .task import Task, get_task
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
 CHECKPOINT_EVERY_S = 10.0
+MAX_RULES = 1000            # the paper uses R = 10; 10^7 rules would exhaust memory mid-run
 
 
 class Stopped(KeyboardInterrupt):
@@ -47,6 +48,8 @@ class Stopped(KeyboardInterrupt):
 def build(cfg: RunConfig):
     """Task, family and search (not yet the evaluator) from a config."""
     validate_number("--seed", cfg.seed, lo=0, integer=True)
+    validate_number("--rules", cfg.family_options.get("rules"), lo=1, hi=MAX_RULES,
+                    integer=True, allow_none=True)        # memory: rules × senses per genome
     if cfg.plugins:
         from .plugins import load_folder
         for folder in cfg.plugins:
@@ -321,18 +324,38 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
         search.load_state_dict(state)
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as e:
         raise FormatError(f"{where}: not a valid checkpoint ({e!r:.200})") from None
-    if search.evaluations != evals:
-        raise FormatError(f"{where}: evaluations {evals} ≠ the search state's "
-                          f"{search.evaluations}")
+    _check_state(search, evals, where)
     search.extend(total or original, original)
     rd.trim_log(n_rows)
     rows = rd.read_log()
-    if rows and rows[-1].get("evaluations") != str(evals):
-        raise FormatError(f"{rd.log_path}: its row {n_rows} does not end at the checkpoint's "
-                          f"{evals} evaluations; the log belongs to another run")
+    last = search.generation - (search.kind == "gp")      # GP rows name the generation told
+    if rows and (rows[-1].get("evaluations") != str(evals)
+                 or rows[-1].get("generation") != str(last)):
+        raise FormatError(f"{rd.log_path}: its row {n_rows} does not end at the checkpoint "
+                          f"(generation {last}, {evals} evaluations); refusing to mix records")
     rec = _Recorder(rd, ident, n_rows, evals, CHECKPOINT_EVERY_S)
     rec.elapsed0 = float(elapsed)
     return rec
+
+
+def _check_state(search, evals: int, where: str) -> None:
+    """The restored search agrees with the checkpoint's counts and its own settings."""
+    s = search.search
+    if search.evaluations != evals:
+        raise FormatError(f"{where}: evaluations {evals} ≠ the search state's "
+                          f"{search.evaluations}")
+    if not 0 <= search.generation <= search.total:
+        raise FormatError(f"{where}: generation {search.generation} is outside "
+                          f"0..{search.total}")
+    if search.kind == "gp":
+        sizes = [("population", len(s.population), s.population_size)]
+    else:
+        n = None if s.working is None else len(s.working)
+        sizes = [("working set", n, s.n_working if n is not None else None),
+                 ("scores", None if s.scores is None else len(s.scores), n)]
+    for what, have, want in sizes:
+        if have != want:
+            raise FormatError(f"{where}: its {what} has {have} entries, the settings say {want}")
 
 
 def _checked_identity(doc: dict, rd: RunDir) -> dict:

@@ -54,6 +54,10 @@ class RunConfig:
             raise FormatError(f"{source}: run lacks {missing}")
         for k, v in d.items():
             _check_type(source, f"run.{k}", v, _TYPES[k])
+        from .families import FAMILIES
+        if d["family"] not in FAMILIES:
+            raise FormatError(f"{source}: run.family {_short(d['family'])} is not one of "
+                              f"{', '.join(FAMILIES)}")
         for k, v in d.get("params", {}).items():
             _check_type(source, f"run.params.{k}", v, (str, int, float, bool))
         for k, v in d.get("family_options", {}).items():

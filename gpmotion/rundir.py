@@ -393,6 +393,9 @@ class RunDir:
         """Keep the header and the first ``n_rows`` rows (rows written after the
         checkpoint that a resume continues from are dropped); atomic."""
         if not self.exists(self.LOG):
+            if n_rows:
+                raise FormatError(f"{self.log_path}: missing, but the checkpoint was taken "
+                                  f"after {n_rows} rows of it")
             return
         text = self.read_bytes(self.LOG, 1 << 30).decode("utf-8", "replace")
         end = -1

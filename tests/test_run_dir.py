@@ -260,3 +260,11 @@ def test_population_2_runs(tmp_path):
     assert main(["run", "lamp_hop", "--out", str(out), "--population", "2",
                  "--param", "seconds=0.3", "--generations", "2", "--quiet",
                  "--no-artifacts"]) == 0
+
+
+def test_absurd_rule_count_refused_before_the_directory(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["run", "starman_travel", "--controller", "bsr-time", "--rules", "10000000",
+                 "--out", str(out)]) == 2
+    one_line_error(capsys, "--rules")
+    assert not out.exists()
