@@ -187,9 +187,9 @@ class _Recorder:
         return time.monotonic() - self.last >= self.every
 
     def flush(self, search, elapsed: float):
-        self.rd.log_rows(self.rows)        # before the checkpoint: a resume trims extras
-        self.n_rows += len(self.rows)
-        self.rows = []
+        rows, self.rows = self.rows, []    # never appended twice, even if interrupted here
+        self.rd.log_rows(rows)             # before the checkpoint: a resume trims extras
+        self.n_rows += len(rows)
         self.rd.save_checkpoint({**self.identity, "search": search.state_dict(),
                                  "evaluations": self.evals, "log_rows": self.n_rows,
                                  "elapsed_s": elapsed})
@@ -198,13 +198,15 @@ class _Recorder:
 
 def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
         quiet: bool = False, artifacts: bool = True, max_generations: int | None = None,
-        extend_generations: int | None = None, checkpoint_every: float | None = None):
+        extend_generations: int | None = None, checkpoint_every: float | None = None,
+        backend: dict | None = None):
     """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
 
     On resume ``cfg`` may carry the command line's request: it must agree with
     the recorded run (one-line error otherwise); only its backend (workers,
-    scheduler, threads) is taken.  ``extend_generations`` adds generations
-    to a run (finished or not); they run at the final weights.
+    scheduler, threads) is taken, as from ``backend`` (a dict of those keys).
+    ``extend_generations`` adds generations to a run (finished or not); they
+    run at the final weights.
     """
     every = _checkpoint_every(checkpoint_every)
     given = cfg
@@ -221,6 +223,10 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
                 check_resume_request(given, cfg, doc, search, rd.path)
                 cfg.workers, cfg.scheduler, cfg.threads = (given.workers, given.scheduler,
                                                            given.threads)
+            for k, v in (backend or {}).items():
+                if k not in ("workers", "scheduler", "threads"):
+                    raise ValueError(f"backend: unknown option {k!r}")
+                setattr(cfg, k, v)
             if extend_generations is not None:
                 doc = _record_extension(rd, doc, search.total, extend_generations)
             rec = _restore(rd, doc, search)

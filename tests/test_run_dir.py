@@ -268,3 +268,23 @@ def test_absurd_rule_count_refused_before_the_directory(tmp_path, capsys):
                  "--out", str(out)]) == 2
     one_line_error(capsys, "--rules")
     assert not out.exists()
+
+
+def test_best_json_of_a_diverged_run_says_so(tmp_path, monkeypatch):
+    import gpmotion.replay as replay
+
+    real = replay.replay_genome
+
+    def diverged(*a, **k):                  # as if every step of the best had blown up
+        traj, costs, measures, ok = real(*a, **k)
+        traj.diverged[:] = True
+        return traj, costs * 0 + 1e6, measures, ok & False
+    monkeypatch.setattr(replay, "replay_genome", diverged)
+    out = tmp_path / "r"
+    assert main(["run", "lamp_hop", "--out", str(out), *GP]) == 0
+    rec = json.loads((out / "best.json").read_text())
+    assert rec["diverged"] is True and rec["success"] is False
+    monkeypatch.undo()
+    out2 = tmp_path / "r2"
+    assert main(["run", "lamp_hop", "--out", str(out2), *GP]) == 0
+    assert json.loads((out2 / "best.json").read_text())["diverged"] is False
