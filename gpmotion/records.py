@@ -6,8 +6,9 @@ job), and its files may later be loaded by someone else's gpmotion.  So:
 * every JSON file is written atomically (temp file in the same directory,
   fsync, ``os.replace``, fsync the directory): a reader sees the old file or
   the new one, never half of either;
-* ``log.csv`` is appended and fsynced row by row, and a torn last line left by
-  a crash is dropped on resume;
+* ``log.csv`` is appended and fsynced in batches just before each checkpoint,
+  and a torn last line left by a crash is dropped on resume (the run
+  directory itself, with its lock, is :mod:`gpmotion.rundir`);
 * loading parses with :mod:`json` only (never ``eval``/``pickle``), caps the
   size, checks a ``"format": "gpmotion-<kind>"`` / ``"version": 1`` envelope
   and turns every problem into one :class:`FormatError` line naming the file.
@@ -22,14 +23,11 @@ penalty before saving.  :func:`read_json` likewise rejects ``NaN``/
 from __future__ import annotations
 
 import contextlib
-import csv
-import io
 import json
 import math
 import os
 import random
 import secrets
-import time
 from pathlib import Path
 from typing import Any, Iterator
 
