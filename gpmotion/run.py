@@ -227,9 +227,10 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
                 if k not in ("workers", "scheduler", "threads"):
                     raise ValueError(f"backend: unknown option {k!r}")
                 setattr(cfg, k, v)
+            rec = _restore(rd, doc, search)                     # checked before extending
             if extend_generations is not None:
-                doc = _record_extension(rd, doc, search.total, extend_generations)
-            rec = _restore(rd, doc, search)
+                doc = _record_extension(rd, doc, search.schedule, extend_generations)
+                search.extend(doc["extended_generations"], search.schedule)
         else:
             task, family, search, actuation = build(cfg)       # validate before the disk
             rd = RunDir.create(out, force=force)
@@ -304,8 +305,7 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
                                     hi=10**9))
     if not rd.has_checkpoint():
         rd.trim_log(0)
-        if total is not None:
-            search.extend(total, original)
+        search.extend(total or original, original)
         return _Recorder(rd, ident, 0, 0, CHECKPOINT_EVERY_S)
     ck = rd.load_checkpoint()
     where = str(rd.checkpoint_path)
