@@ -62,7 +62,7 @@ def kills(kind: str, n: int, root: Path, rng, every: str, verbose: bool) -> dict
         raise SystemExit(f"reference {kind} run failed: {p.stderr.read()}")
     duration = time.perf_counter() - t0
     want = fingerprint(ref)
-    same = before_end = 0
+    same = before_end = before_config = 0
     for i in range(n):
         out = root / f"{kind}-{i}"
         delay = float(rng.uniform(0.0, duration))
@@ -77,6 +77,7 @@ def kills(kind: str, n: int, root: Path, rng, every: str, verbose: bool) -> dict
             err = r.communicate()[1]
             ok = r.returncode == 0 and fingerprint(out) == want
         else:                               # killed before it wrote anything: start again
+            before_config += 1
             r = gpm([*argv, "--out", out, "--force"])
             err = r.communicate()[1]
             ok = r.returncode == 0 and fingerprint(out) == want
@@ -86,7 +87,7 @@ def kills(kind: str, n: int, root: Path, rng, every: str, verbose: bool) -> dict
                   f"{'mid-run' if killed_early else 'after the end'}: "
                   f"{'identical' if ok else 'DIFFERENT ' + err.strip()[-200:]}")
     return {"kind": kind, "kills": n, "identical": same, "killed_mid_run": before_end,
-            "reference_s": round(duration, 1)}
+            "before_config": before_config, "reference_s": round(duration, 1)}
 
 
 # ------------------------------------------------------------------ bad inputs
@@ -300,7 +301,8 @@ def main(argv=None):
         return
     for k in out.get("kills", []):
         print(f"kills ({k['kind']}): {k['identical']}/{k['kills']} resumed to the uninterrupted "
-              f"result ({k['killed_mid_run']} killed mid-run; reference {k['reference_s']} s)")
+              f"result ({k['killed_mid_run']} killed before the end, {k['before_config']} of "
+              f"them before config.json existed; reference {k['reference_s']} s)")
     if "inputs" in out:
         c = out["inputs"]
         print(f"bad inputs: {c['error']} clean one-line errors + {c['ok']} expected successes "
