@@ -144,7 +144,8 @@ def test_read_json_rejects_binary_missing_and_huge(tmp_path):
         read_json(huge, kind="checkpoint")
 
 
-@settings(max_examples=300, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=300, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                   HealthCheck.too_slow])
 @given(data=st.binary(max_size=300))
 def test_fuzz_bytes_only_raise_format_error(tmp_path, data):
     p = tmp_path / "fuzz.json"
@@ -165,7 +166,8 @@ json_values = st.recursive(
     max_leaves=20)
 
 
-@settings(max_examples=300, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=300, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                   HealthCheck.too_slow])
 @given(value=json_values)
 def test_fuzz_json_values_only_raise_format_error(tmp_path, value):
     p = tmp_path / "fuzz.json"
@@ -355,7 +357,7 @@ def test_python_random_state_validated(bad):
 leaf = st.none() | st.booleans() | st.integers(-2**130, 2**130) | st.floats() | st.text(max_size=5)
 
 
-@settings(max_examples=200)
+@settings(max_examples=200, suppress_health_check=[HealthCheck.too_slow])  # a loaded machine
 @given(name=st.sampled_from(["PCG64", "PCG64DXSM", "Philox", "SFC64", "MT19937", "x"]),
        inner=st.dictionaries(st.sampled_from(["state", "inc", "key", "pos", "counter",
                                               "buffer_pos"]),
@@ -369,7 +371,7 @@ def test_fuzz_numpy_state_only_raises_format_error(name, inner, has, uint):
         pass
 
 
-@settings(max_examples=100)
+@settings(max_examples=100, suppress_health_check=[HealthCheck.too_slow])
 @given(version=leaf, internal=st.lists(st.integers(-5, 2**33), min_size=620, max_size=630)
        | leaf, gauss=leaf)
 def test_fuzz_python_state_only_raises_format_error(version, internal, gauss):
