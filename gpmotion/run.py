@@ -50,10 +50,8 @@ def build(cfg: RunConfig):
     validate_number("--seed", cfg.seed, lo=0, integer=True)
     validate_number("--rules", cfg.family_options.get("rules"), lo=1, hi=MAX_RULES,
                     integer=True, allow_none=True)        # memory: rules × senses per genome
-    if cfg.plugins:
-        from .plugins import load_folder
-        for folder in cfg.plugins:
-            load_folder(folder)
+    from .plugins import require          # records to check, never folders to import
+    cfg.plugins = require(cfg.plugins, "the run's plugins (config.json)")
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
@@ -77,10 +75,11 @@ def _search_options(cfg: RunConfig, task: Task) -> dict:
     return opts
 
 
-def _evaluator(cfg, task, family, actuation):
+def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
-                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins)
+                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
+                          **(backend or {}))
 
 
 # ------------------------------------------------------------------ progress
@@ -196,56 +195,68 @@ class _Recorder:
         self.last = time.monotonic()
 
 
-def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
-        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None,
-        extend_generations: int | None = None, checkpoint_every: float | None = None,
-        backend: dict | None = None):
+def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = False,
+        resume: bool = False, quiet: bool = False, artifacts: bool = True,
+        max_generations: int | None = None, extend_generations: int | None = None,
+        checkpoint_every: float | None = None, backend: dict | None = None):
     """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
 
-    On resume ``cfg`` may carry the command line's request: it must agree with
-    the recorded run (one-line error otherwise); only its backend (workers,
-    scheduler, threads) is taken, as from ``backend`` (a dict of those keys).
+    ``out`` defaults to ``runs/TASK-FAMILY-seedN`` in the current folder (as `gpmotion run`).
+    ``backend``: this invocation's evaluator settings (``workers``, ``scheduler``,
+    ``security``...); on resume ``workers``/``scheduler`` replace the recorded
+    ones -- every backend gives the same result.  On resume ``cfg`` may carry
+    the command line's request: it must agree with the recorded run (one-line
+    error otherwise); only its backend (workers, scheduler, threads) is taken.
     ``extend_generations`` adds generations to a run (finished or not); they
     run at the final weights.
     """
+    if out is None:
+        if cfg is None:
+            raise ValueError("resume: give the run directory")
+        out = Path("runs") / f"{cfg.task}-{cfg.family}-seed{cfg.seed}"
     every = _checkpoint_every(checkpoint_every)
-    given = cfg
-    if resume:
-        rd, cfg, doc = _open_resume(out)
-    else:
-        if extend_generations is not None:
-            raise ConfigError("--extend-generations continues an existing run: use resume")
-        rd, doc = None, None
+    backend = dict(backend or {})
+    given, evaluator, rd = cfg, None, None
+    if not resume and extend_generations is not None:
+        raise ConfigError("--extend-generations continues an existing run: use resume")
     try:
         if resume:
+            rd, cfg, doc = _open_resume(out)
             task, family, search, actuation = build(cfg)
             if given is not None:
                 check_resume_request(given, cfg, doc, search, rd.path)
                 cfg.workers, cfg.scheduler, cfg.threads = (given.workers, given.scheduler,
                                                            given.threads)
-            for k, v in (backend or {}).items():
-                if k not in ("workers", "scheduler", "threads"):
-                    raise ValueError(f"backend: unknown option {k!r}")
-                setattr(cfg, k, v)
+            if "workers" in backend or "scheduler" in backend:
+                cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
             rec = _restore(rd, doc, search)                     # checked before extending
             if extend_generations is not None:
                 doc = _record_extension(rd, doc, search.schedule, extend_generations)
                 search.extend(doc["extended_generations"], search.schedule)
-        else:
-            task, family, search, actuation = build(cfg)       # validate before the disk
+        else:       # validate everything (the scheduler too) before touching the disk
+            task, family, search, actuation = build(cfg)
+            evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd = RunDir.create(out, force=force)
+            from .plugins import for_record
+            cfg.plugins = for_record(cfg.plugins, rd.path)  # path relative to the run: information
             doc = _write_config(rd, cfg, task, family, actuation)
             rec = _Recorder(rd, _identity(doc), 0, 0, every)
         rec.every = every
         if not quiet:
             verb = "resume" if resume else "run"
             print(banner(cfg, task, family, search, actuation, rd, verb), file=sys.stderr)
-        _loop(cfg, task, family, actuation, search, rec, quiet, max_generations)
+        if evaluator is None:
+            evaluator = _evaluator(cfg, task, family, actuation, backend)
+        _loop(evaluator, search, rec, quiet, max_generations)
         if search.done:
             _finish(rd, cfg, task, family, actuation, search, artifacts)
     finally:
-        if rd is not None:
-            rd.close()
+        try:
+            if evaluator is not None:
+                evaluator.close()
+        finally:
+            if rd is not None:
+                rd.close()
     return search.best, search.best_cost, rd
 
 
@@ -350,6 +361,8 @@ def _check_state(search, evals: int, where: str) -> None:
     if search.evaluations != evals:
         raise FormatError(f"{where}: evaluations {evals} ≠ the search state's "
                           f"{search.evaluations}")
+    if search.evaluations > 0 and search.best is None:
+        raise FormatError(f"{where}: no best genome after {search.evaluations} evaluations")
     if not 0 <= search.generation <= search.total:
         raise FormatError(f"{where}: generation {search.generation} is outside "
                           f"0..{search.total}")
@@ -377,9 +390,8 @@ def _short(x) -> str:
     return r if len(r) <= 24 else r[:21] + "..."
 
 
-def _loop(cfg, task, family, actuation, search, rec: _Recorder, quiet, max_generations):
+def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
     """ask → evaluate → tell → log row; checkpoint when due, at the end, on a signal."""
-    evaluator = _evaluator(cfg, task, family, actuation)
     prog = Progress(search.total, quiet)
     t0 = time.perf_counter() - getattr(rec, "elapsed0", 0.0)
     stop = {"sig": None}
@@ -410,14 +422,16 @@ def _loop(cfg, task, family, actuation, search, rec: _Recorder, quiet, max_gener
             if search.done or stop["sig"] is not None or rec.due():
                 rec.flush(search, time.perf_counter() - t0)
             prog.update(search.generation, ev, search.best_cost, row)
+    except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
+            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.path}` "
+                          "continues") from None
+        raise
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        try:
-            if told and rec.rows:            # an error or a break: keep what was told
-                rec.flush(search, time.perf_counter() - t0)
-        finally:
-            evaluator.close()
+        if told and rec.rows:                # an error or a break: keep what was told
+            rec.flush(search, time.perf_counter() - t0)
     if stop["sig"] is not None:
         term = stop["sig"] == signal.SIGTERM
         raise Stopped(f"checkpoint saved after generation {search.generation}; "

@@ -58,13 +58,13 @@ class RunConfig:
         if d["family"] not in FAMILIES:
             raise FormatError(f"{source}: run.family {_short(d['family'])} is not one of "
                               f"{', '.join(FAMILIES)}")
-        for k, v in d.get("params", {}).items():
-            _check_type(source, f"run.params.{k}", v, (str, int, float, bool))
+        for k, v in d.get("params", {}).items():     # a figure variant is an object
+            _check_type(source, f"run.params.{k}", v, (str, int, float, bool, dict))
         for k, v in d.get("family_options", {}).items():
             _check_type(source, f"run.family_options.{k}", v, (str, int, float, bool, list, None))
         _check_search(source, d["family"], d.get("search", {}))
-        for i, p in enumerate(d.get("plugins", [])):
-            _check_type(source, f"run.plugins[{i}]", p, (str,))
+        for i, p in enumerate(d.get("plugins", [])):  # requirement records (plugins.require)
+            _check_type(source, f"run.plugins[{i}]", p, (str, dict))
         return cls(**d)
 
 
@@ -200,5 +200,3 @@ def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
             refuse(_flag(k), eff.get(k, stored.search.get(k)), v)
     if given.actuation and given.actuation != doc.get("actuation"):
         refuse("--actuation", doc.get("actuation"), given.actuation)
-    if given.plugins and given.plugins != stored.plugins:
-        refuse("--plugins", stored.plugins, given.plugins)
