@@ -122,6 +122,9 @@ def parser() -> argparse.ArgumentParser:
                                  formatter_class=argparse.RawDescriptionHelpFormatter))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
     p.add_argument("run_dir", help="a run directory (runs/TASK-CONTROLLER-seedN)")
+    p.add_argument("--extend-generations", type=int, metavar="N",
+                   help="add N generations (rounds) to the run, finished or not; they run at "
+                        "the final weights of the style terms")
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--workers", type=int, help="resume on a process pool (replaces the recorded backend)")
     p.add_argument("--scheduler", help="resume on Dask: 'local' or tcp://HOST:PORT (replaces it too)")
@@ -184,7 +187,7 @@ def main(argv=None) -> int:
         return COMMANDS[args.cmd](args) or 0
     except KeyboardInterrupt as e:
         print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
-        return 130
+        return getattr(e, "code", 130)          # 143 after SIGTERM
     except BrokenPipeError:                 # `gpmotion show TASK | head`
         sys.stderr.close()
         return 0
@@ -297,8 +300,11 @@ def _out_dir(args, seed, key, value) -> Path:
 
 
 def cmd_run(args):
-    from .run import run
+    from .run import build, run
     configs = list(_run_configs(args))        # every config validated before the first run
+    if not args.resume:                       # (built, too: a series' bad value writes nothing)
+        for cfg, _ in configs:
+            build(cfg)
     dirs = []
     for cfg, out in configs:
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
@@ -344,7 +350,8 @@ def cmd_resume(args):
     backend = _backend(args)
     if args.workers is not None or args.scheduler is not None:
         backend.update(workers=args.workers or 0, scheduler=args.scheduler)
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend)
+    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend,
+                         extend_generations=args.extend_generations)
     _summary(rd)
 
 

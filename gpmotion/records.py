@@ -6,8 +6,9 @@ job), and its files may later be loaded by someone else's gpmotion.  So:
 * every JSON file is written atomically (temp file in the same directory,
   fsync, ``os.replace``, fsync the directory): a reader sees the old file or
   the new one, never half of either;
-* ``log.csv`` is appended and fsynced row by row, and a torn last line left by
-  a crash is dropped on resume;
+* ``log.csv`` is appended and fsynced in batches just before each checkpoint,
+  and a torn last line left by a crash is dropped on resume (the run
+  directory itself, with its lock, is :mod:`gpmotion.rundir`);
 * loading parses with :mod:`json` only (never ``eval``/``pickle``), caps the
   size, checks a ``"format": "gpmotion-<kind>"`` / ``"version": 1`` envelope
   and turns every problem into one :class:`FormatError` line naming the file.
@@ -22,14 +23,11 @@ penalty before saving.  :func:`read_json` likewise rejects ``NaN``/
 from __future__ import annotations
 
 import contextlib
-import csv
-import io
 import json
 import math
 import os
 import random
 import secrets
-import time
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -85,11 +83,20 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
         finally:
             os.close(fd)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(e, OSError) and not e.filename:     # ENOSPC from write(): name the file
+            raise OSError(e.errno, f"cannot write {_shown(path)}: {e.strerror or e}") from None
         raise
     _fsync_dir(path.parent)
+
+
+def _shown(path: Path) -> Path:
+    """A path as the user knows it: RunDir writes through /proc/self/fd/N
+    (its directory's descriptor), which means nothing to a reader."""
+    from .rundir import display_path
+    return display_path(path)
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
@@ -378,158 +385,8 @@ def numpy_rng_from_json(d: Any) -> np.random.Generator:
 
 # -------------------------------------------------------------- run folder
 
-class RunDir:
-    """One run's directory: config.json, log.csv, checkpoint.json, best.json
-    and artifacts (curve.png, filmstrip.png, motion.gif).
-
-    Build with :meth:`create`; an existing run is never overwritten or
-    deleted — ``force`` moves it aside, ``resume`` continues it.
-    """
-
-    CONFIG, LOG, BEST, CHECKPOINT = "config.json", "log.csv", "best.json", "checkpoint.json"
-
-    def __init__(self, path: str | os.PathLike):
-        self.path = Path(path)
-        self.backup: Path | None = None
-        self._fields: list[str] | None = None
-
-    @classmethod
-    def create(cls, path: str | os.PathLike, *, force: bool = False,
-               resume: bool = False) -> "RunDir":
-        path = Path(path)
-        if force and resume:
-            raise RunDirError("choose either --force or --resume, not both")
-        run = cls(path)
-        if path.exists() and not path.is_dir():
-            raise RunDirError(f"run directory {path} exists and is not a directory")
-        if path.is_dir() and any(path.iterdir()) and not resume:
-            if not force:
-                raise RunDirError(
-                    f"run directory {path} exists and is not empty; pass --force "
-                    "to move it aside or --resume to continue it")
-            run.backup = cls._move_aside(path)
-        try:
-            path.mkdir(parents=True, exist_ok=True)
-            probe = path / f".write-test.{os.getpid()}"
-            probe.write_bytes(b"")
-            probe.unlink()
-        except OSError as e:
-            raise RunDirError(f"cannot write run directory {path}: "
-                              f"{e.strerror or e}") from None
-        return run
-
-    @staticmethod
-    def _move_aside(path: Path) -> Path:
-        stamp = time.strftime("%Y%m%d-%H%M%S")
-        backup = path.with_name(f"{path.name}.bak-{stamp}")
-        n = 1
-        while backup.exists():
-            backup = path.with_name(f"{path.name}.bak-{stamp}-{n}")
-            n += 1
-        try:
-            os.rename(path, backup)
-        except OSError as e:
-            raise RunDirError(f"cannot move {path} aside to {backup}: "
-                              f"{e.strerror or e}") from None
-        return backup
-
-    # -- JSON records
-    def write_config(self, config: dict) -> Path:
-        atomic_write_json(self.path / self.CONFIG, envelope("config", config))
-        return self.path / self.CONFIG
-
-    def read_config(self) -> dict:
-        return read_json(self.path / self.CONFIG, kind="config")
-
-    def write_best(self, best: dict) -> Path:
-        atomic_write_json(self.path / self.BEST, envelope("best", best))
-        return self.path / self.BEST
-
-    @property
-    def checkpoint_path(self) -> Path:
-        return self.path / self.CHECKPOINT
-
-    def save_checkpoint(self, state: dict) -> Path:
-        atomic_write_json(self.checkpoint_path, envelope("checkpoint", state))
-        return self.checkpoint_path
-
-    def load_checkpoint(self, *, max_bytes: int = DEFAULT_MAX_BYTES) -> dict:
-        return read_json(self.checkpoint_path, kind="checkpoint", max_bytes=max_bytes)
-
-    def artifact(self, name: str) -> Path:
-        """Path for an artifact file directly inside the run directory."""
-        if not name or name in (".", "..") or "/" in name or "\\" in name or "\0" in name:
-            raise ValueError(f"artifact name must be a plain file name, got {name!r}")
-        return self.path / name
-
-    # -- log.csv
-    @property
-    def log_path(self) -> Path:
-        return self.path / self.LOG
-
-    def _open_log(self) -> list[str] | None:
-        """Header of an existing log (dropping a torn last line), or None."""
-        path = self.log_path
-        if not path.exists():
-            return None
-        with open(path, "rb+") as f:
-            data = f.read()
-            if data and not data.endswith(b"\n"):
-                keep = data.rfind(b"\n") + 1  # 0 if even the header is torn
-                f.truncate(keep)
-                f.flush()
-                os.fsync(f.fileno())
-                data = data[:keep]
-        if not data:
-            return None
-        header = data.split(b"\n", 1)[0].decode("utf-8").rstrip("\r")
-        return next(csv.reader([header]))
-
-    def log_row(self, row: dict) -> None:
-        """Append one row to log.csv and fsync it.
-
-        The header comes from the first row's keys (or the existing file's
-        header on resume); later rows may omit keys (blank cells) but not add
-        new ones.  Newlines inside values are replaced by spaces so that one
-        row is always one line — what makes torn-line recovery sound.
-        """
-        if self._fields is None:
-            self._fields = self._open_log()
-            write_header = self._fields is None
-            if write_header:
-                self._fields = [str(k) for k in row]
-        else:
-            write_header = False
-        extra = [k for k in row if str(k) not in self._fields]
-        if extra:
-            raise ValueError(f"{self.log_path}: row has columns {extra} not in "
-                             f"the header {self._fields}")
-        buf = io.StringIO()
-        writer = csv.writer(buf, lineterminator="\n")
-        if write_header:
-            writer.writerow(self._fields)
-        cells = {str(k): v for k, v in row.items()}
-        writer.writerow([_cell(cells.get(k)) for k in self._fields])
-        with open(self.log_path, "a", encoding="utf-8", newline="") as f:
-            f.write(buf.getvalue())
-            f.flush()
-            os.fsync(f.fileno())
-
-    def read_log(self) -> list[dict[str, str]]:
-        """Rows of log.csv as dicts of strings (complete lines only)."""
-        if not self.log_path.exists():
-            return []
-        text = self.log_path.read_text(encoding="utf-8")
-        if not text.endswith("\n"):
-            text = text[: text.rfind("\n") + 1]
-        return list(csv.DictReader(io.StringIO(text)))
-
-
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, np.generic):
-        v = v.item()
-    if isinstance(v, float):
-        return repr(v)  # round-trips exactly; inf/nan as 'inf'/'nan'
-    return str(v).replace("\r", " ").replace("\n", " ")
+def __getattr__(name):          # RunDir lives in gpmotion.rundir (imports this module)
+    if name == "RunDir":
+        from .rundir import RunDir
+        return RunDir
+    raise AttributeError(name)

@@ -1,82 +1,78 @@
-"""The run loop: search ⇄ evaluator, with a log row and an atomic checkpoint
-after every generation, so a killed run resumes to exactly the same result.
+"""The run loop: search ⇄ evaluator, with log rows and an atomic checkpoint,
+so a run killed at any instant resumes to exactly the same result.
+
+Records stay consistent at every instant: log rows are buffered and appended
+(one write, one fsync) just before each checkpoint, and a resume trims the
+log to the rows the checkpoint counts (to none when no checkpoint exists
+yet).  A checkpoint is taken every ``checkpoint_every`` seconds (default 10;
+env ``GPMOTION_CHECKPOINT_EVERY``), at the end, on Ctrl-C and on SIGTERM, and
+carries the run's identity (run id + config.json's digest), so a checkpoint,
+a config and a log from different runs are never mixed.
 """
 from __future__ import annotations
 
+import math
+import os
 import platform
 import signal
 import sys
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import __version__
-from .evaluate import Evaluation, spec_of
+from .evaluate import spec_of
 from .families import make_family
-from .records import RunDir, validate_number
+from .records import ConfigError, FormatError, validate_number
+from .rundir import RunDir
+from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
+                        search_settings, settings_mismatch)
 from .search.adapters import make_search
 from .task import Task, get_task
 
+__all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
-@dataclass
-class RunConfig:
-    """Everything that fixes a run (written to config.json)."""
-    task: str
-    family: str = "gp"
-    seed: int = 0
-    params: dict = field(default_factory=dict)          # task parameters
-    family_options: dict = field(default_factory=dict)  # rules, t_per, primitives...
-    search: dict = field(default_factory=dict)          # population, generations...
-    actuation: str | None = None
-    workers: int = 0
-    scheduler: str | None = None
-    threads: int | None = None
-    plugins: list = field(default_factory=list)
-
-    def to_json(self) -> dict:
-        return dict(task=self.task, family=self.family, seed=self.seed, params=self.params,
-                    family_options=self.family_options, search=self.search,
-                    actuation=self.actuation, workers=self.workers, scheduler=self.scheduler,
-                    threads=self.threads, plugins=self.plugins)
-
-    @classmethod
-    def from_json(cls, d: dict) -> "RunConfig":
-        keys = cls.__dataclass_fields__
-        if not isinstance(d, dict):
-            raise ValueError("config.json: no 'run' settings" if d is None else
-                             f"config.json: 'run' must be an object, got {type(d).__name__}")
-        missing = [k for k in ("task", "family", "seed") if k not in d]
-        if missing:
-            raise ValueError(f"config.json lacks {missing}")
-        for k, types in _FIELD_TYPES.items():     # a hand-edited file: one line, not a TypeError
-            if k in d and not (isinstance(d[k], types) and not isinstance(d[k], bool) or
-                               d[k] is None and k in _OPTIONAL):
-                raise ValueError(f"config.json: run.{k} must be {types[0].__name__}, "
-                                 f"got {type(d[k]).__name__}")
-        return cls(**{k: d[k] for k in keys if k in d})
+CHECKPOINT_EVERY_S = 10.0
+MAX_RULES = 1000            # the paper uses R = 10; 10^7 rules would exhaust memory mid-run
 
 
-_FIELD_TYPES = {"task": (str,), "family": (str,), "seed": (int,), "params": (dict,),
-                "family_options": (dict,), "search": (dict,), "actuation": (str,), "workers": (int,),
-                "scheduler": (str,), "threads": (int,), "plugins": (list,)}
-_OPTIONAL = {"actuation", "scheduler", "threads", "plugins"}
+class Stopped(KeyboardInterrupt):
+    """Ctrl-C / SIGTERM: the run checkpointed and stopped (``code``: exit status)."""
+
+    def __init__(self, msg: str, code: int = 130):
+        super().__init__(msg)
+        self.code = code
 
 
 def build(cfg: RunConfig):
     """Task, family and search (not yet the evaluator) from a config."""
     validate_number("--seed", cfg.seed, lo=0, integer=True)
+    validate_number("--rules", cfg.family_options.get("rules"), lo=1, hi=MAX_RULES,
+                    integer=True, allow_none=True)        # memory: rules × senses per genome
     from .plugins import require          # records to check, never folders to import
     cfg.plugins = require(cfg.plugins, "the run's plugins (config.json)")
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
-        search = make_search(family, cfg.seed, **cfg.search)
-    except TypeError as e:               # a hand-edited config.json: a value of the wrong type
-        raise ValueError(f"bad run settings ({e})") from None
+        search = make_search(family, cfg.seed, **_search_options(cfg, task))
+    except TypeError as e:           # an option the constructor does not take
+        raise ConfigError(f"{cfg.task} ({cfg.family}): {e}") from None
     actuation = cfg.actuation or family.default_actuation
     return task, family, search, actuation
+
+
+def _search_options(cfg: RunConfig, task: Task) -> dict:
+    """cfg.search, with GP's ring-migration size fitted to small islands (the
+    user cannot set ``migrants``; its default 2 needs islands of 4)."""
+    opts = {k: v for k, v in cfg.search.items() if v is not None}
+    if cfg.family == "gp" and "migrants" not in opts:
+        from .search.adapters import GP_DEFAULTS
+        pop = opts.get("population", task.gp_defaults.get("population", GP_DEFAULTS["population"]))
+        islands = opts.get("islands", 1)
+        if isinstance(pop, int) and isinstance(islands, int) and islands >= 1:
+            opts["migrants"] = min(2, pop // islands // 2)
+    return opts
 
 
 def _evaluator(cfg, task, family, actuation, backend=None):
@@ -86,158 +82,368 @@ def _evaluator(cfg, task, family, actuation, backend=None):
                           **(backend or {}))
 
 
-class Progress:
-    """Per-generation progress on stderr: one rewritten line on a terminal,
-    plain lines otherwise (logs, CI)."""
+# ------------------------------------------------------------------ progress
 
-    def __init__(self, total: int, quiet: bool = False):
-        self.total, self.quiet, self.t0 = total, quiet, time.perf_counter()
+class Progress:
+    """Progress on stderr: one rewritten line on a terminal, plain lines otherwise,
+    at most one every ``every`` seconds (a serial round takes milliseconds)."""
+
+    def __init__(self, total: int, quiet: bool = False, every: float = 1.0):
+        self.total, self.quiet, self.every = total, quiet, every
+        self.t0 = time.perf_counter()
         self.evals = 0
         self.tty = sys.stderr.isatty()
+        self._shown = -math.inf
+        self._first = None            # (time, generation) after the first generation: no compile
 
-    def update(self, gen: int, ev: Evaluation, best: float):
+    def eta(self, gen: int, now: float) -> str:
+        """From the pace since the first generation, once 3 more are done and 2 s passed."""
+        if self._first is None:
+            self._first = (now, gen)
+            return "eta …"
+        t1, g1 = self._first
+        if gen - g1 < 3 or now - t1 < 2.0:
+            return "eta …"
+        eta = (now - t1) / (gen - g1) * max(0, self.total - gen)
+        return f"eta {eta:,.0f}s"
+
+    def update(self, gen: int, ev, best: float, row: dict | None = None):
         self.evals += len(ev.costs)
         if self.quiet:
             return
-        el = time.perf_counter() - self.t0
+        now = time.perf_counter()
+        eta = self.eta(gen, now)
+        last = gen >= self.total
+        if now - self._shown < self.every and not last:
+            return
+        self._shown = now
+        el = now - self.t0
         rate = self.evals / el if el > 0 else 0.0
-        eta = el / max(gen, 1) * (self.total - gen)
-        line = (f"gen {gen:>4}/{self.total}  best {best:.4f}  median {np.median(ev.costs):.4f}  "
+        final = (row or {}).get("best_final")
+        best_s = f"best {best:.4f}" + (f" (final weights {float(final):.4f})"
+                                       if final not in (None, "") else "")
+        line = (f"gen {gen:>4}/{self.total}  {best_s}  median {np.median(ev.costs):.4f}  "
                 f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
-                f"{rate:,.0f} evals/s  eta {eta:,.0f}s")
+                f"{rate:,.0f} evals/s  {eta}")
         if self.tty:
-            end = "\n" if gen >= self.total else ""
-            print("\r" + line + "\033[K", end=end, file=sys.stderr, flush=True)
+            print("\r" + line + "\033[K", end="\n" if last else "", file=sys.stderr, flush=True)
         else:
             print(line, file=sys.stderr, flush=True)
 
 
-def _log_row(search, ev: Evaluation, evals_total: int, elapsed: float) -> dict:
+def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDir,
+           verb: str) -> str:
+    """What the run is: task, family, seed, actuation, and the style-term schedule."""
+    head = (f"{verb} {cfg.task} ({cfg.family}, seed {cfg.seed}"
+            f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}")
+    own = "" if cfg.actuation else f", {family.name}'s default"
+    act = f"  actuation: {actuation}{own} · {search.total:,} generations"
+    return "\n".join([head, act, "  " + phase_line(task, search)])
+
+
+def phase_line(task: Task, search) -> str:
+    """The style-term phase-in schedule in generations, one short line."""
+    n = getattr(search, "schedule", None) or search.total
+    sched = max(1, n - 1 if search.kind == "gp" else n)       # progress = generation / sched
+    phased = [t for t in task.terms if t.phase[1] > t.phase[0]]
+    parts = [f"{t.name} {round(t.phase[0] * sched)}→{round(t.phase[1] * sched)}" for t in phased]
+    parts += [f"{k} from {e.start:g} {round(e.phase[0] * sched)}→{round(e.phase[1] * sched)}"
+              for k, e in task.curriculum.items()]
+    if not parts:
+        return "style terms: all at full weight from the first generation"
+    return "style terms phase in over generations: " + ", ".join(parts)
+
+
+# ------------------------------------------------------------------ the loop
+
+def _log_row(search, ev, evals_total: int, elapsed: float) -> dict:
     row = search.row(ev)
     return {"generation": row.pop("generation"), "evaluations": evals_total, **row,
             "evals_per_s": round(evals_total / elapsed, 1) if elapsed > 0 else "",
             "elapsed_s": round(elapsed, 3)}
 
 
-def _trim_log(run: RunDir, evaluations: int):
-    """On resume, drop log rows written after the checkpoint was taken
-    (rows count evaluations, which only grow)."""
-    rows = run.read_log()
-    keep = [r for r in rows if int(r["evaluations"]) <= evaluations]
-    if len(keep) != len(rows) or (run.log_path.exists() and not rows):
-        from .records import atomic_write_text
-        import csv
-        import io
-        buf = io.StringIO()
-        if rows:
-            w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-            w.writeheader()
-            w.writerows(keep)
-        atomic_write_text(run.log_path, buf.getvalue())
+def _checkpoint_every(value) -> float:
+    if value is None:
+        value = os.environ.get("GPMOTION_CHECKPOINT_EVERY", CHECKPOINT_EVERY_S)
+    return float(validate_number("GPMOTION_CHECKPOINT_EVERY", value, lo=0, hi=86400))
+
+
+class _Recorder:
+    """Buffers log rows; a flush appends them, then replaces the checkpoint."""
+
+    def __init__(self, rd: RunDir, identity: dict, n_rows: int, evals: int, every: float):
+        self.rd, self.identity, self.every = rd, identity, every
+        self.n_rows, self.evals = n_rows, evals
+        self.rows: list[dict] = []
+        self.last = time.monotonic()
+
+    def add(self, row: dict):
+        self.rows.append(row)
+        self.evals = row["evaluations"]
+
+    def due(self) -> bool:
+        return time.monotonic() - self.last >= self.every
+
+    def flush(self, search, elapsed: float):
+        rows, self.rows = self.rows, []    # never appended twice, even if interrupted here
+        self.rd.log_rows(rows)             # before the checkpoint: a resume trims extras
+        self.n_rows += len(rows)
+        self.rd.save_checkpoint({**self.identity, "search": search.state_dict(),
+                                 "evaluations": self.evals, "log_rows": self.n_rows,
+                                 "elapsed_s": elapsed})
+        self.last = time.monotonic()
 
 
 def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = False,
         resume: bool = False, quiet: bool = False, artifacts: bool = True,
-        max_generations: int | None = None, backend: dict | None = None):
+        max_generations: int | None = None, extend_generations: int | None = None,
+        checkpoint_every: float | None = None, backend: dict | None = None):
     """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
 
     ``out`` defaults to ``runs/TASK-FAMILY-seedN`` in the current folder (as `gpmotion run`).
     ``backend``: this invocation's evaluator settings (``workers``, ``scheduler``,
     ``security``...); on resume ``workers``/``scheduler`` replace the recorded
-    ones -- every backend gives the same result.
+    ones -- every backend gives the same result.  On resume ``cfg`` may carry
+    the command line's request: it must agree with the recorded run (one-line
+    error otherwise); only its backend (workers, scheduler, threads) is taken.
+    ``extend_generations`` adds generations to a run (finished or not); they
+    run at the final weights.
     """
     if out is None:
         if cfg is None:
             raise ValueError("resume: give the run directory")
         out = Path("runs") / f"{cfg.task}-{cfg.family}-seed{cfg.seed}"
+    every = _checkpoint_every(checkpoint_every)
     backend = dict(backend or {})
-    if resume:
-        if not (Path(out) / RunDir.CONFIG).exists():
-            raise ValueError(f"{out}: no config.json to resume from")
-        rd = RunDir.create(out, resume=True)
-        cfg = RunConfig.from_json(rd.read_config().get("run"))
-        if "workers" in backend or "scheduler" in backend:
-            cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
-        task, family, search, actuation = build(cfg)
-        evaluator = None                                    # made once the checkpoint is read
-    else:       # validate everything (the scheduler too) before touching the disk
-        task, family, search, actuation = build(cfg)
-        evaluator = _evaluator(cfg, task, family, actuation, backend)
-        try:
-            rd = RunDir.create(out, force=force)
-        except BaseException:
-            evaluator.close()
-            raise
-        from .plugins import for_record
-        cfg.plugins = for_record(cfg.plugins, rd.path)      # path relative to the run: information
-    evals = 0
-    elapsed0 = 0.0
-    if resume and rd.checkpoint_path.exists():
-        ck = rd.load_checkpoint()
-        try:
-            search.load_state_dict(ck["search"])
-            evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
-            if evals > 0 and search.best is None:
-                raise ValueError("no best genome after evaluations")
-        except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as e:
-            from .records import FormatError
-            raise FormatError(f"{rd.checkpoint_path}: not a valid checkpoint ({e!r:.200})") from None
-        _trim_log(rd, evals)
-    elif not resume:
-        rd.write_config({"run": cfg.to_json(), "task_config": task.config(),
-                         "family_config": family.config(), "actuation": actuation,
-                         "versions": _versions(), "spec": spec_of(task, family, actuation, cfg.plugins)})
-    if not quiet:
-        print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
-              f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
-    if evaluator is None:
-        evaluator = _evaluator(cfg, task, family, actuation, backend)
-    prog = Progress(search.total, quiet)
-    t0 = time.perf_counter() - elapsed0
-    stop = {"flag": False}
-
-    def on_sigint(signum, frame):            # finish this generation, checkpoint, exit
-        if stop["flag"]:
-            raise KeyboardInterrupt
-        stop["flag"] = True
-        print("\ninterrupt: finishing this generation and checkpointing (Ctrl-C again to abort)",
-              file=sys.stderr)
-
-    old = signal.signal(signal.SIGINT, on_sigint) if _main_thread() else None
-    done_now = 0
+    given, evaluator, rd = cfg, None, None
+    if not resume and extend_generations is not None:
+        raise ConfigError("--extend-generations continues an existing run: use resume")
     try:
-        while not search.done and not stop["flag"]:
+        if resume:
+            rd, cfg, doc = _open_resume(out)
+            task, family, search, actuation = build(cfg)
+            if given is not None:
+                check_resume_request(given, cfg, doc, search, rd.path)
+                cfg.workers, cfg.scheduler, cfg.threads = (given.workers, given.scheduler,
+                                                           given.threads)
+            if "workers" in backend or "scheduler" in backend:
+                cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
+            rec = _restore(rd, doc, search)                     # checked before extending
+            if extend_generations is not None:
+                doc = _record_extension(rd, doc, search.schedule, extend_generations)
+                search.extend(doc["extended_generations"], search.schedule)
+        else:       # validate everything (the scheduler too) before touching the disk
+            task, family, search, actuation = build(cfg)
+            evaluator = _evaluator(cfg, task, family, actuation, backend)
+            rd = RunDir.create(out, force=force)
+            from .plugins import for_record
+            cfg.plugins = for_record(cfg.plugins, rd.path)  # path relative to the run: information
+            doc = _write_config(rd, cfg, task, family, actuation)
+            rec = _Recorder(rd, _identity(doc), 0, 0, every)
+        rec.every = every
+        if not quiet:
+            verb = "resume" if resume else "run"
+            print(banner(cfg, task, family, search, actuation, rd, verb), file=sys.stderr)
+        if evaluator is None:
+            evaluator = _evaluator(cfg, task, family, actuation, backend)
+        _loop(evaluator, search, rec, quiet, max_generations)
+        if search.done:
+            _finish(rd, cfg, task, family, actuation, search, artifacts)
+    finally:
+        try:
+            if evaluator is not None:
+                evaluator.close()
+        finally:
+            if rd is not None:
+                rd.close()
+    return search.best, search.best_cost, rd
+
+
+def _identity(doc: dict) -> dict:
+    return {"run_id": doc["run_id"], "config_digest": config_digest(doc)}
+
+
+def _write_config(rd: RunDir, cfg, task, family, actuation) -> dict:
+    rd.write_config({"run_id": new_run_id(), "run": cfg.to_json(), "task_config": task.config(),
+                     "family_config": family.config(), "actuation": actuation,
+                     "versions": _versions(),
+                     "spec": spec_of(task, family, actuation, cfg.plugins)})
+    return rd.read_config()           # digest what is on disk
+
+
+def _open_resume(out):
+    """Lock the run and read its config (checked field by field)."""
+    path = Path(out)
+    if not (path / RunDir.CONFIG).exists():
+        runs = sorted(p.parent for p in path.glob("*/**/config.json")) if path.is_dir() else []
+        if runs:
+            shown = " ".join(str(p) for p in runs[:4]) + (" …" if len(runs) > 4 else "")
+            raise ConfigError(f"{out} is a folder of {len(runs)} runs (a series), not one run; "
+                              f"resume each: {shown}")
+        raise ConfigError(f"{out}: no config.json to resume from")
+    rd = RunDir.create(out, resume=True)
+    try:
+        doc = rd.read_config()
+        cfg = RunConfig.from_json(doc.get("run"), f"{rd.path / RunDir.CONFIG}")
+    except BaseException:
+        rd.close()
+        raise
+    return rd, cfg, doc
+
+
+def _record_extension(rd: RunDir, doc: dict, configured: int, extra: int) -> dict:
+    """config.json records the new total (outside the digest): a kill later still
+    resumes to it, and the checkpoint stays bound to the same config."""
+    extra = validate_number("--extend-generations", extra, lo=1, hi=10_000_000, integer=True)
+    now = doc.get("extended_generations", configured)
+    now = validate_number(f"{rd.path / RunDir.CONFIG}: extended_generations", now,
+                          lo=configured, hi=10**9, integer=True)
+    doc = {k: v for k, v in doc.items() if k not in ("format", "version")}
+    doc["extended_generations"] = int(now) + int(extra)
+    rd.write_config(doc)
+    return rd.read_config()
+
+
+def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
+    """Bring the search to the checkpoint (checked against this run) and the
+    log to the checkpoint's rows; none yet: an empty log."""
+    ident = _identity(_checked_identity(doc, rd))
+    original = search.total
+    total = doc.get("extended_generations")
+    if total is not None:
+        total = int(validate_number("extended_generations", total, lo=original, integer=True,
+                                    hi=10**9))
+    if not rd.has_checkpoint():
+        rd.trim_log(0)
+        search.extend(total or original, original)
+        return _Recorder(rd, ident, 0, 0, CHECKPOINT_EVERY_S)
+    ck = rd.load_checkpoint()
+    where = str(rd.checkpoint_path)
+    for k in ("run_id", "config_digest"):
+        if ck.get(k) != ident[k]:
+            what = "another run" if k == "run_id" else "a different config.json (edited?)"
+            raise FormatError(f"{where}: belongs to {what}: its {k} {_short(ck.get(k))} ≠ "
+                              f"{_short(ident[k])}; refusing to mix records")
+    evals = validate_number(f"{where}: evaluations", ck.get("evaluations"), lo=0, hi=10**12,
+                            integer=True)
+    n_rows = validate_number(f"{where}: log_rows", ck.get("log_rows"), lo=0, hi=10**9,
+                             integer=True)
+    elapsed = validate_number(f"{where}: elapsed_s", ck.get("elapsed_s", 0.0), lo=0, hi=1e9)
+    state = ck.get("search")
+    cfg_ck = state.get("config") if isinstance(state, dict) else None
+    bad = settings_mismatch(search_settings(search), cfg_ck, search.total_key,
+                            {original, total or original})
+    if bad:
+        raise FormatError(f"{where}: search settings differ from config.json ({bad}); "
+                          "config.json is authoritative — refusing the checkpoint")
+    try:
+        search.load_state_dict(state)
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as e:
+        raise FormatError(f"{where}: not a valid checkpoint ({e!r:.200})") from None
+    _check_state(search, evals, where)
+    search.extend(total or original, original)
+    rd.trim_log(n_rows)
+    rows = rd.read_log()
+    last = search.generation - (search.kind == "gp")      # GP rows name the generation told
+    if rows and (rows[-1].get("evaluations") != str(evals)
+                 or rows[-1].get("generation") != str(last)):
+        raise FormatError(f"{rd.log_path}: its row {n_rows} does not end at the checkpoint "
+                          f"(generation {last}, {evals} evaluations); refusing to mix records")
+    rec = _Recorder(rd, ident, n_rows, evals, CHECKPOINT_EVERY_S)
+    rec.elapsed0 = float(elapsed)
+    return rec
+
+
+def _check_state(search, evals: int, where: str) -> None:
+    """The restored search agrees with the checkpoint's counts and its own settings."""
+    s = search.search
+    if search.evaluations != evals:
+        raise FormatError(f"{where}: evaluations {evals} ≠ the search state's "
+                          f"{search.evaluations}")
+    if search.evaluations > 0 and search.best is None:
+        raise FormatError(f"{where}: no best genome after {search.evaluations} evaluations")
+    if not 0 <= search.generation <= search.total:
+        raise FormatError(f"{where}: generation {search.generation} is outside "
+                          f"0..{search.total}")
+    if search.kind == "gp":
+        sizes = [("population", len(s.population), s.population_size)]
+    else:
+        n = None if s.working is None else len(s.working)
+        sizes = [("working set", n, s.n_working if n is not None else None),
+                 ("scores", None if s.scores is None else len(s.scores), n)]
+    for what, have, want in sizes:
+        if have != want:
+            raise FormatError(f"{where}: its {what} has {have} entries, the settings say {want}")
+
+
+def _checked_identity(doc: dict, rd: RunDir) -> dict:
+    rid = doc.get("run_id")
+    if not isinstance(rid, str) or not rid:
+        raise FormatError(f"{rd.path / RunDir.CONFIG}: no run_id (written by an older gpmotion "
+                          "or edited); cannot bind its checkpoint — start a new run")
+    return doc
+
+
+def _short(x) -> str:
+    r = repr(x)
+    return r if len(r) <= 24 else r[:21] + "..."
+
+
+def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
+    """ask → evaluate → tell → log row; checkpoint when due, at the end, on a signal."""
+    prog = Progress(search.total, quiet)
+    t0 = time.perf_counter() - getattr(rec, "elapsed0", 0.0)
+    stop = {"sig": None}
+
+    def on_signal(signum, frame):            # finish this generation, checkpoint, exit
+        if stop["sig"] is not None:
+            raise KeyboardInterrupt("aborted; the last checkpoint is kept")
+        stop["sig"] = signum
+        name = "interrupt" if signum == signal.SIGINT else "terminate"
+        print(f"\n{name}: finishing this generation and checkpointing "
+              "(send it again to abort)", file=sys.stderr)
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)} \
+        if _main_thread() else {}
+    done_now, told = 0, True
+    try:
+        while not search.done and stop["sig"] is None:
             if max_generations is not None and done_now >= max_generations:
                 break
             genomes = search.ask()
             ev = evaluator.evaluate(genomes, search.progress)
+            told = False
             search.tell(ev)
-            evals += len(genomes)
+            row = _log_row(search, ev, rec.evals + len(genomes), time.perf_counter() - t0)
+            rec.add(row)
+            told = True
             done_now += 1
-            el = time.perf_counter() - t0
-            rd.log_row(_log_row(search, ev, evals, el))
-            rd.save_checkpoint({"search": search.state_dict(), "evaluations": evals,
-                                "elapsed_s": el})
-            prog.update(search.generation, ev, search.best_cost)
+            if search.done or stop["sig"] is not None or rec.due():
+                rec.flush(search, time.perf_counter() - t0)
+            prog.update(search.generation, ev, search.best_cost, row)
     except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
         if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
-            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rd.path}` "
+            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.path}` "
                           "continues") from None
         raise
     finally:
-        if old is not None:
-            signal.signal(signal.SIGINT, old)
-        evaluator.close()
-    if stop["flag"]:
-        raise KeyboardInterrupt(f"checkpoint saved after generation {search.generation}; "
-                                f"`gpmotion resume {rd.path}` continues")
-    if search.done:
-        from .replay import replay_genome
-        replay = replay_genome(task, family, actuation, search.best)   # once, for both
-        write_best(rd, cfg, task, family, actuation, search, replay)
-        if artifacts:
-            write_artifacts(rd, task, family, search.best, replay[0])
-    return search.best, search.best_cost, rd
+        for s, h in old.items():
+            signal.signal(s, h)
+        if told and rec.rows:                # an error or a break: keep what was told
+            rec.flush(search, time.perf_counter() - t0)
+    if stop["sig"] is not None:
+        term = stop["sig"] == signal.SIGTERM
+        raise Stopped(f"checkpoint saved after generation {search.generation}; "
+                      f"`gpmotion resume {rec.rd.path}` continues", 143 if term else 130)
+
+
+def _finish(rd, cfg, task, family, actuation, search, artifacts):
+    from .replay import replay_genome
+    replay = replay_genome(task, family, actuation, search.best)   # once, for both
+    write_best(rd, cfg, task, family, actuation, search, replay)
+    if artifacts:
+        write_artifacts(rd, task, family, search.best, replay[0])
 
 
 def _main_thread():
@@ -266,6 +472,7 @@ def write_best(rd: RunDir, cfg, task, family, actuation, search, replay):
     rec["terms"] = task.breakdown(measures, 0, 1.0)
     rec["final_cost"] = float(costs[0])
     rec["success"] = bool(ok[0])
+    rec["diverged"] = bool(traj.diverged[0])     # its final_cost is then the WORST penalty
     rec["facts"] = task.describe(traj, measures)
     rd.write_best(rec)
 

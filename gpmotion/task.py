@@ -28,6 +28,7 @@ from .figures import load_figure
 from .model import Figure, Scene, make_scene
 
 WORST = 1e6        # cost of a diverged episode: finite, so JSON logs stay valid
+PARAM_BOUND = 1e6  # |numeric task parameter| ≤ this: weights × values stay far from overflow
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,9 @@ class Task:
                     raise ValueError(f"task {self.name}: parameter {k} must be a number, got {v!r}") from None
                 if not math.isfinite(v):
                     raise ValueError(f"task {self.name}: parameter {k} must be finite, got {v!r}")
+                if abs(v) > PARAM_BOUND:
+                    raise ValueError(f"task {self.name}: parameter {k} must be within "
+                                     f"±{PARAM_BOUND:g}, got {v!r}")
             self.p[k] = v
         for k in self.curriculum:
             if k not in self.params or isinstance(self.params[k], bool):
@@ -116,8 +120,10 @@ class Task:
             if not lo <= float(self.p[k]) <= hi:
                 raise ValueError(f"task {self.name}: parameter {k} must be within {lo:g}..{hi:g}, "
                                  f"got {self.p[k]:g}")
-        if not 0 < float(self.p.get("seconds", 1.0)) <= 120:
-            raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
+        shortest = max(0.05, 2 * self.record_every * self.dt)     # a few recorded frames
+        if not shortest <= float(self.p.get("seconds", 1.0)) <= 120:
+            raise ValueError(f"task {self.name}: seconds must be in [{shortest:g}, 120], "
+                             f"got {self.p['seconds']}")
         self.validate()
         self.fig: Figure = load_figure(self.figure)
         if variant is not None:
@@ -222,7 +228,7 @@ class Task:
             total += term.weight * term.factor(progress) * np.nan_to_num(v, nan=WORST, posinf=WORST)
         bad = traj.diverged | ~np.isfinite(total)
         total[bad] = WORST
-        total = np.minimum(total, WORST)
+        total = np.clip(total, -WORST, WORST)      # statistics over a population stay finite
         ok = self.success(traj, measures) & ~bad
         return total, measures, ok
 

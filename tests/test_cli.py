@@ -56,7 +56,8 @@ def test_killed_run_resumes_to_the_uninterrupted_result(tmp_path):
     ref, killed = tmp_path / "ref", tmp_path / "killed"
     assert main(["run", "lamp_hop", "--out", str(ref), *args]) == 0
     proc = subprocess.Popen([sys.executable, "-m", "gpmotion.cli", "run", "lamp_hop", "--out",
-                             str(killed), *args])
+                             str(killed), *args],
+                            env={**os.environ, "GPMOTION_CHECKPOINT_EVERY": "0"})
     log = killed / "log.csv"
     t0 = time.time()
     while time.time() - t0 < 120:
@@ -77,7 +78,8 @@ def test_ctrl_c_checkpoints_and_exits_cleanly(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "gpmotion.cli", "run", "lamp_hop", "--out",
                              str(out), "--param", "seconds=0.3", "--population", "16",
                              "--generations", "200", "--quiet", "--no-artifacts"],
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "GPMOTION_CHECKPOINT_EVERY": "0"})
     t0 = time.time()
     while time.time() - t0 < 120 and not (out / "checkpoint.json").exists():
         time.sleep(0.05)

@@ -40,6 +40,12 @@ class _Adapter:
     def load_state_dict(self, d):
         self.search.load_state_dict(d)
 
+    @property
+    def evaluations(self):
+        return self.search.evaluations
+
+    schedule = None        # generations the style phases span (None: all of them)
+
 
 class GPAdapter(_Adapter):
     kind = "gp"
@@ -57,6 +63,22 @@ class GPAdapter(_Adapter):
     @property
     def total(self):
         return self.search.generations
+
+    total_key = "generations"
+
+    def extend(self, total: int, schedule: int):
+        """Run to ``total`` generations; the phases keep spanning ``schedule``, so
+        the added generations run at the final weights.  A finished search
+        kept its last population unbred: breed it as tell() would have."""
+        s = self.search
+        self.schedule = s.schedule = schedule
+        if total > s.generations and s.done and s.costs is not None:
+            s.generations = total
+            s.generation -= 1
+            with s._own_random():
+                s._set_population(s._breed())
+            s.generation += 1
+        s.generations = max(s.generations, total)
 
     def tell(self, ev: Evaluation):
         self.search.tell(ev.costs, ev)
@@ -94,11 +116,19 @@ class SerialAdapter(_Adapter):
 
     @property
     def progress(self):
-        return min(1.0, self.search.generation / max(1, self.search.n_generations))
+        n = self.schedule or self.search.n_generations
+        return min(1.0, self.search.generation / max(1, n))
 
     @property
     def total(self):
         return self.search.n_generations
+
+    total_key = "n_generations"
+
+    def extend(self, total: int, schedule: int):
+        """Run to ``total`` rounds; progress keeps spanning ``schedule`` rounds."""
+        self.schedule = schedule
+        self.search.n_generations = max(self.search.n_generations, total)
 
     def tell(self, ev: Evaluation):
         self.search.tell(ev.costs, ev.extras)

@@ -189,8 +189,11 @@ class GPSearch:
             random.setstate(outer)
 
     # -- phases --------------------------------------------------------------
+    schedule = None      # generations the phases span; set by an extension (adapters)
+
     def progress_of(self, generation: int) -> float:
-        return 1.0 if self.generations == 1 else min(1.0, generation / (self.generations - 1))
+        n = self.schedule or self.generations
+        return 1.0 if n == 1 else min(1.0, generation / (n - 1))
 
     @property
     def progress(self) -> float:

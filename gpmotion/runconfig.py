@@ -1,0 +1,202 @@
+"""What fixes a run (config.json's ``run`` section), checked field by field
+when read back, and the run identity that binds config, checkpoint and log.
+
+A hand-edited config gives one line naming the field, never a traceback;
+``run --resume`` with settings that differ from the recorded ones is refused
+(it would silently keep the old values), naming the option.
+"""
+from __future__ import annotations
+
+import hashlib
+import inspect
+import json
+import secrets
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .records import ConfigError, FormatError
+
+
+@dataclass
+class RunConfig:
+    """Everything that fixes a run (written to config.json)."""
+    task: str
+    family: str = "gp"
+    seed: int = 0
+    params: dict = field(default_factory=dict)          # task parameters
+    family_options: dict = field(default_factory=dict)  # rules, t_per, primitives...
+    search: dict = field(default_factory=dict)          # population, generations...
+    actuation: str | None = None
+    workers: int = 0
+    scheduler: str | None = None
+    threads: int | None = None
+    plugins: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return dict(task=self.task, family=self.family, seed=self.seed, params=self.params,
+                    family_options=self.family_options, search=self.search,
+                    actuation=self.actuation, workers=self.workers, scheduler=self.scheduler,
+                    threads=self.threads, plugins=self.plugins)
+
+    @classmethod
+    def from_json(cls, d, source: str = "config.json") -> "RunConfig":
+        """Checked inverse of :meth:`to_json`: every problem is one FormatError line."""
+        if d is None:
+            raise FormatError(f"{source}: no 'run' section (the run's task, family, seed and "
+                              "settings); not a gpmotion run config")
+        if not isinstance(d, dict):
+            raise FormatError(f"{source}: 'run' must be an object, got {type(d).__name__}")
+        unknown = sorted(set(d) - set(_TYPES))
+        if unknown:
+            raise FormatError(f"{source}: run has unknown key(s) {unknown}")
+        missing = [k for k in ("task", "family", "seed") if k not in d]
+        if missing:
+            raise FormatError(f"{source}: run lacks {missing}")
+        for k, v in d.items():
+            _check_type(source, f"run.{k}", v, _TYPES[k])
+        from .families import FAMILIES
+        if d["family"] not in FAMILIES:
+            raise FormatError(f"{source}: run.family {_short(d['family'])} is not one of "
+                              f"{', '.join(FAMILIES)}")
+        for k, v in d.get("params", {}).items():     # a figure variant is an object
+            _check_type(source, f"run.params.{k}", v, (str, int, float, bool, dict))
+        for k, v in d.get("family_options", {}).items():
+            _check_type(source, f"run.family_options.{k}", v, (str, int, float, bool, list, None))
+        _check_search(source, d["family"], d.get("search", {}))
+        for i, p in enumerate(d.get("plugins", [])):  # requirement records (plugins.require)
+            _check_type(source, f"run.plugins[{i}]", p, (str, dict))
+        return cls(**d)
+
+
+_TYPES = {"task": (str,), "family": (str,), "seed": (int,), "params": (dict,),
+          "family_options": (dict,), "search": (dict,), "actuation": (str, None),
+          "workers": (int,), "scheduler": (str, None), "threads": (int, None),
+          "plugins": (list,)}
+_NAMES = {str: "a string", int: "an integer", float: "a number", bool: "true/false",
+          dict: "an object", list: "a list", None: "null"}
+
+
+def _check_type(source: str, where: str, v, types: tuple) -> None:
+    ok = any((v is None) if t is None else
+             (isinstance(v, t) and not (t in (int, float) and isinstance(v, bool)))
+             for t in types)
+    if isinstance(v, float) and v != v:
+        ok = False
+    if not ok:
+        want = " or ".join(_NAMES[t] for t in types)
+        raise FormatError(f"{source}: {where} must be {want}, got {_short(v)}")
+
+
+def search_keys(family: str) -> set[str]:
+    """The search settings a config may set for a family."""
+    if family == "gp":
+        from .search.gp import GPSearch
+        return set(inspect.signature(GPSearch).parameters) - {"family", "seed"}
+    from .search.serial import SerialSearch
+    return set(inspect.signature(SerialSearch).parameters) - {
+        "init_fn", "mutate_fn", "rng", "maximize", "genome_to_json", "genome_from_json"}
+
+
+def _check_search(source: str, family: str, search: dict) -> None:
+    known = search_keys(family)
+    unknown = sorted(set(search) - known)
+    if unknown:
+        raise FormatError(f"{source}: run.search has unknown setting(s) {unknown} for "
+                          f"{family}; known: {sorted(known)}")
+    for k, v in search.items():
+        _check_type(source, f"run.search.{k}", v, (int, float, str, bool, list, None))
+
+
+def _short(x) -> str:
+    r = repr(x)
+    return r if len(r) <= 40 else r[:37] + "..."
+
+
+# ------------------------------------------------------------------ identity
+
+def new_run_id() -> str:
+    return secrets.token_hex(8)
+
+
+def config_digest(doc: dict) -> str:
+    """sha256 of config.json's content (less its envelope and a recorded
+    extension, which only ever raises the generation total)."""
+    body = {k: v for k, v in doc.items()
+            if k not in ("format", "version", "extended_generations")}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def search_settings(adapter) -> dict:
+    """The search's effective settings, as its checkpoints record them."""
+    s = adapter.search
+    return s.config() if hasattr(s, "config") else s.state_dict()["config"]
+
+
+def _same(a, b) -> bool:
+    num = (int, float)
+    if isinstance(a, num) and isinstance(b, num) and not isinstance(a, bool) \
+            and not isinstance(b, bool):
+        return float(a) == float(b)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return a == b
+
+
+def settings_mismatch(expected: dict, got, total_key: str, totals: set) -> str:
+    """'' when a checkpoint's search settings are config.json's (the total may be
+    the configured one or an extension's), else what differs."""
+    if not isinstance(got, dict):
+        return "it records no search settings"
+    diff = []
+    for k in sorted(set(expected) | set(got)):
+        if k == total_key:
+            if not any(_same(got.get(k), t) for t in totals):
+                diff.append(f"{k} {_short(got.get(k))} ≠ {max(totals)}")
+        elif not _same(expected.get(k), got.get(k)):
+            diff.append(f"{k} {_short(got.get(k))} ≠ {_short(expected.get(k))}")
+    return ", ".join(diff[:3]) + (" …" if len(diff) > 3 else "")
+
+
+# ------------------------------------------------------------------ resume
+
+_FLAGS = {"generations": "--generations", "n_generations": "--generations",
+          "n_working": "--working", "population": "--population", "seed": "--seed",
+          "t_per": "--t-per"}
+
+
+def _flag(key: str) -> str:
+    return _FLAGS.get(key, "--" + key.replace("_", "-"))
+
+
+def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
+                         path: Path) -> None:
+    """``run --resume`` continues the recorded run: any setting given on the
+    command line must be the recorded one (backend options excepted)."""
+    def refuse(flag, recorded, asked):
+        hint = (f"; `gpmotion resume {path} --extend-generations N` adds N generations"
+                if flag == "--generations" else "; use a new --out (or --force) for another run")
+        raise ConfigError(f"{path}: --resume continues the run recorded in config.json, but "
+                          f"{flag} differs (recorded {_short(recorded)}, given {_short(asked)})"
+                          + hint)
+    for k in ("task", "family", "seed"):
+        if getattr(given, k) != getattr(stored, k):
+            refuse("--controller" if k == "family" else "task" if k == "task" else _flag(k),
+                   getattr(stored, k), getattr(given, k))
+    if given.params:
+        from .task import get_task
+        now = get_task(given.task, **given.params).p
+        rec = (doc.get("task_config") or {}).get("params") or {}
+        for k in given.params:
+            if not _same(now.get(k), rec.get(k)):
+                refuse(f"--param {k}", rec.get(k), given.params[k])
+    fam = {**(doc.get("family_config") or {}), **stored.family_options}
+    for k, v in given.family_options.items():
+        if not _same(v, fam.get(k)):
+            refuse(_flag(k), fam.get(k), v)
+    eff = search_settings(search)
+    for k, v in given.search.items():
+        if v is not None and not _same(v, eff.get(k, stored.search.get(k))):
+            refuse(_flag(k), eff.get(k, stored.search.get(k)), v)
+    if given.actuation and given.actuation != doc.get("actuation"):
+        refuse("--actuation", doc.get("actuation"), given.actuation)

@@ -1,0 +1,420 @@
+"""One run's directory: config.json, log.csv, checkpoint.json, best.json and
+artifacts, with exactly one writer.
+
+* **One writer.**  :meth:`RunDir.create` takes an exclusive ``flock`` on
+  ``.lock`` inside the directory and holds it until :meth:`close` or the
+  process dies (the kernel releases it, so a SIGKILLed run never blocks its
+  own resume).  A second ``run``/``resume``/``run --force`` on a live run
+  directory is refused with one line.
+* **Writes go through the directory we locked**, not through its name: every
+  path handed out is ``/proc/self/fd/N/NAME`` (N: our descriptor of the
+  directory), so a run whose directory was renamed or replaced keeps writing
+  into its own files, never into a newcomer's.  (Where /proc is missing the
+  plain path is used.)
+* **Symlinks inside the run directory are never followed**: reads and log
+  appends open with ``O_NOFOLLOW`` (and refuse hard-linked files), JSON and
+  artifacts are replaced by rename (which replaces a link, never its target),
+  and the lock file is the write probe (created, never truncated through a
+  link).
+* Temp files left by a killed writer (``.NAME.PID.HEX.tmp``) are removed when
+  the next writer takes the lock.
+"""
+from __future__ import annotations
+
+import csv
+import errno
+import fcntl
+import io
+import os
+import stat
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .records import (DEFAULT_MAX_BYTES, FormatError, RunDirError, atomic_write_json,
+                      atomic_write_text, envelope, parse_json)
+
+LOCK = ".lock"
+_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+_DISPLAY: dict[str, Path] = {}       # "/proc/self/fd/N" -> the path the user gave
+
+
+def display_path(path: str | os.PathLike) -> Path:
+    """``path`` with a RunDir's /proc/self/fd/N prefix shown as the run directory."""
+    s = str(path)
+    for prefix, real in _DISPLAY.items():
+        if s == prefix or s.startswith(prefix + "/"):
+            return Path(str(real) + s[len(prefix):])
+    return Path(s)
+
+
+def _busy(path: Path, lock_fd: int) -> RunDirError:
+    try:
+        pid = os.pread(lock_fd, 32, 0).decode("ascii", "replace").strip()
+    except OSError:
+        pid = ""
+    who = f" (pid {pid})" if pid.isdigit() else ""
+    return RunDirError(f"run directory {path} is in use by another gpmotion process{who}; "
+                       "wait for it to finish or stop it first")
+
+
+class _Lock:
+    """An exclusive flock on ``.lock`` in an open directory (fd ``dirfd``)."""
+
+    def __init__(self, path: Path, dirfd: int):
+        try:
+            fd = os.open(LOCK, os.O_RDWR | os.O_CREAT | _NOFOLLOW, 0o666, dir_fd=dirfd)
+        except OSError as e:
+            why = "it is a symbolic link" if e.errno == errno.ELOOP else (e.strerror or str(e))
+            raise RunDirError(f"cannot write run directory {path}: {LOCK}: {why}") from None
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            os.close(fd)
+            raise RunDirError(f"cannot lock run directory {path}: {LOCK} is not a regular file")
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as e:
+            err = _busy(path, fd) if e.errno in (errno.EWOULDBLOCK, errno.EACCES) else \
+                RunDirError(f"cannot lock run directory {path}: {e.strerror or e}")
+            os.close(fd)
+            raise err from None
+        if st.st_nlink == 1:              # ours alone: say who holds it
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self.fd = fd
+
+    def release(self):
+        if self.fd is not None:
+            os.close(self.fd)             # closing the last descriptor drops the flock
+            self.fd = None
+
+
+_OPEN_LOCKS: list[_Lock] = []
+
+
+def _drop_locks_in_child():
+    """A forked child must not keep its parent's run locked after the parent dies."""
+    for lk in _OPEN_LOCKS:
+        if lk.fd is not None:
+            try:
+                os.close(lk.fd)
+            except OSError:
+                pass
+            lk.fd = None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_drop_locks_in_child)
+
+
+def _entries(dirfd: int) -> list[str]:
+    """Names in the directory that are a run's content (not the lock, not temp files)."""
+    return [n for n in os.listdir(dirfd) if n != LOCK and not _is_temp(n)]
+
+
+def _is_temp(name: str) -> bool:
+    return name.startswith(".") and (name.endswith(".tmp") or name.startswith(".write-test."))
+
+
+def _nonempty(path: Path) -> bool:
+    try:
+        return any(n != LOCK for n in os.listdir(path))
+    except OSError:
+        return False
+
+
+class RunDir:
+    """One run's directory (see the module docstring).
+
+    Build with :meth:`create`; an existing run is never overwritten or
+    deleted — ``force`` moves it aside, ``resume`` continues it.
+    """
+
+    CONFIG, LOG, BEST, CHECKPOINT = "config.json", "log.csv", "best.json", "checkpoint.json"
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path)
+        self.backup: Path | None = None
+        self._fields: list[str] | None = None
+        self._dirfd: int | None = None
+        self._lock: _Lock | None = None
+        self._base = self.path            # where files are opened: /proc/self/fd/N
+
+    # ------------------------------------------------------------ lifetime
+    @classmethod
+    def create(cls, path: str | os.PathLike, *, force: bool = False,
+               resume: bool = False) -> "RunDir":
+        """Create (or reopen, with ``resume``) and lock a run directory."""
+        path = Path(path)
+        if force and resume:
+            raise RunDirError("choose either --force or --resume, not both")
+        if path.exists() and not path.is_dir():
+            raise RunDirError(f"run directory {path} exists and is not a directory")
+        if resume and not path.is_dir():
+            raise RunDirError(f"run directory {path} does not exist")
+        run = cls(path)
+        if path.is_dir() and _nonempty(path) and not resume:
+            if not force:
+                raise RunDirError(
+                    f"run directory {path} exists and is not empty; pass --force "
+                    "to move it aside or --resume to continue it")
+            run.backup = cls._move_aside(path)
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+            run._dirfd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError as e:
+            raise RunDirError(f"cannot write run directory {path}: "
+                              f"{e.strerror or e}") from None
+        try:
+            run._take(force or not resume)
+        except BaseException:
+            run.close()
+            raise
+        return run
+
+    def _take(self, must_be_empty: bool) -> None:
+        self._lock = _Lock(self.path, self._dirfd)      # also the write probe
+        _OPEN_LOCKS.append(self._lock)
+        if must_be_empty and _entries(self._dirfd):     # another writer came and went
+            raise RunDirError(f"run directory {self.path} exists and is not empty; pass "
+                              "--force to move it aside or --resume to continue it")
+        for name in os.listdir(self._dirfd):            # temp files of a killed writer
+            if _is_temp(name):
+                try:
+                    os.unlink(name, dir_fd=self._dirfd)
+                except OSError:
+                    pass
+        proc = Path(f"/proc/self/fd/{self._dirfd}")
+        if proc.is_dir():
+            self._base = proc
+            _DISPLAY[str(proc)] = self.path
+
+    def close(self) -> None:
+        """Release the lock (idempotent); the files stay."""
+        _DISPLAY.pop(str(self._base), None)
+        self._base = self.path
+        if self._lock is not None:
+            self._lock.release()
+            if self._lock in _OPEN_LOCKS:
+                _OPEN_LOCKS.remove(self._lock)
+            self._lock = None
+        if self._dirfd is not None:
+            os.close(self._dirfd)
+            self._dirfd = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    @staticmethod
+    def _move_aside(path: Path) -> Path:
+        """Rename a finished (unlocked) run out of the way; a live one is refused."""
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        backup = path.with_name(f"{path.name}.bak-{stamp}")
+        n = 1
+        while backup.exists():
+            backup = path.with_name(f"{path.name}.bak-{stamp}-{n}")
+            n += 1
+        try:
+            dirfd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError as e:
+            raise RunDirError(f"cannot move {path} aside: {e.strerror or e}") from None
+        lock = None
+        try:
+            lock = _Lock(path, dirfd)           # refuses while its writer lives
+            os.rename(path, backup)
+        except OSError as e:
+            raise RunDirError(f"cannot move {path} aside to {backup}: "
+                              f"{e.strerror or e}") from None
+        finally:
+            if lock is not None:
+                lock.release()
+            os.close(dirfd)
+        return backup
+
+    # ------------------------------------------------------------ paths
+    def file(self, name: str) -> Path:
+        """Where to open ``name`` (a plain file name) inside this run."""
+        if not name or name in (".", "..") or "/" in name or "\\" in name or "\0" in name:
+            raise ValueError(f"artifact name must be a plain file name, got {name!r}")
+        return self._base / name
+
+    artifact = file
+
+    def exists(self, name: str) -> bool:
+        return os.path.lexists(self.file(name))
+
+    def read_bytes(self, name: str, max_bytes: int = DEFAULT_MAX_BYTES) -> bytes:
+        """A file's bytes, refusing symlinks and anything over ``max_bytes``."""
+        shown = self.path / name
+        try:
+            fd = os.open(self.file(name), os.O_RDONLY | _NOFOLLOW)
+        except OSError as e:
+            why = "a symbolic link (not followed)" if e.errno == errno.ELOOP else \
+                f"cannot read ({e.strerror or e})"
+            raise FormatError(f"{shown}: {why}") from None
+        with open(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise FormatError(f"{shown}: not a regular file")
+            data = f.read(max_bytes + 1)
+        if len(data) > max_bytes:
+            raise FormatError(f"{shown}: larger than the {max_bytes}-byte limit")
+        return data
+
+    def read_json(self, name: str, kind: str, max_bytes: int = DEFAULT_MAX_BYTES) -> dict:
+        return parse_json(self.read_bytes(name, max_bytes), kind=kind, source=str(self.path / name))
+
+    # ------------------------------------------------------------ JSON records
+    def write_config(self, config: dict) -> Path:
+        atomic_write_json(self.file(self.CONFIG), envelope("config", config))
+        return self.path / self.CONFIG
+
+    def read_config(self) -> dict:
+        return self.read_json(self.CONFIG, "config")
+
+    def write_best(self, best: dict) -> Path:
+        atomic_write_json(self.file(self.BEST), envelope("best", best))
+        return self.path / self.BEST
+
+    @property
+    def checkpoint_path(self) -> Path:
+        return self.path / self.CHECKPOINT
+
+    def has_checkpoint(self) -> bool:
+        return self.exists(self.CHECKPOINT)
+
+    def save_checkpoint(self, state: dict) -> Path:
+        atomic_write_json(self.file(self.CHECKPOINT), envelope("checkpoint", state))
+        return self.checkpoint_path
+
+    def load_checkpoint(self, *, max_bytes: int = DEFAULT_MAX_BYTES) -> dict:
+        return self.read_json(self.CHECKPOINT, "checkpoint", max_bytes)
+
+    # ------------------------------------------------------------ log.csv
+    @property
+    def log_path(self) -> Path:
+        return self.path / self.LOG
+
+    def _open_log_fd(self, flags: int) -> int:
+        """Open log.csv without following a link; refuse one hard-linked elsewhere."""
+        try:
+            fd = os.open(self.file(self.LOG), flags | _NOFOLLOW, 0o666)
+        except OSError as e:
+            why = "it is a symbolic link (not followed)" if e.errno == errno.ELOOP else \
+                (e.strerror or str(e))
+            raise OSError(e.errno, f"cannot write {self.log_path}: {why}") from None
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
+            os.close(fd)
+            raise RunDirError(f"{self.log_path}: not a plain file of this run (a link?); "
+                              "refusing to write it")
+        return fd
+
+    def _open_log(self) -> list[str] | None:
+        """Header of an existing log (dropping a torn last line), or None."""
+        if not self.exists(self.LOG):
+            return None
+        with open(self._open_log_fd(os.O_RDWR), "rb+") as f:
+            data = f.read()
+            if data and not data.endswith(b"\n"):
+                keep = data.rfind(b"\n") + 1  # 0 if even the header is torn
+                f.truncate(keep)
+                f.flush()
+                os.fsync(f.fileno())
+                data = data[:keep]
+        if not data:
+            return None
+        header = data.split(b"\n", 1)[0].decode("utf-8").rstrip("\r")
+        return next(csv.reader([header]))
+
+    def log_row(self, row: dict) -> None:
+        """Append one row to log.csv and fsync it."""
+        self.log_rows([row])
+
+    def log_rows(self, rows: list[dict]) -> None:
+        """Append rows to log.csv with one write and one fsync.
+
+        The header comes from the first row's keys (or the existing file's
+        header on resume); later rows may omit keys (blank cells) but not add
+        new ones.  Newlines inside values are replaced by spaces so that one
+        row is always one line — what makes torn-line recovery sound.
+        """
+        if not rows:
+            return
+        if self._fields is None:
+            self._fields = self._open_log()
+            write_header = self._fields is None
+            if write_header:
+                self._fields = [str(k) for k in rows[0]]
+        else:
+            write_header = False
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        if write_header:
+            writer.writerow(self._fields)
+        for row in rows:
+            extra = [k for k in row if str(k) not in self._fields]
+            if extra:
+                raise ValueError(f"{self.log_path}: row has columns {extra} not in "
+                                 f"the header {self._fields}")
+            cells = {str(k): v for k, v in row.items()}
+            writer.writerow([_cell(cells.get(k)) for k in self._fields])
+        data = buf.getvalue().encode("utf-8")
+        fd = self._open_log_fd(os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+        try:
+            while data:
+                data = data[os.write(fd, data):]
+            os.fsync(fd)
+        except OSError as e:
+            raise OSError(e.errno, f"cannot write {self.log_path}: {e.strerror or e}") from None
+        finally:
+            os.close(fd)
+
+    def read_log(self) -> list[dict[str, str]]:
+        """Rows of log.csv as dicts of strings (complete lines only)."""
+        if not self.exists(self.LOG):
+            return []
+        text = self.read_bytes(self.LOG, 1 << 30).decode("utf-8", "replace")
+        if not text.endswith("\n"):
+            text = text[: text.rfind("\n") + 1]
+        return list(csv.DictReader(io.StringIO(text)))
+
+    def trim_log(self, n_rows: int) -> None:
+        """Keep the header and the first ``n_rows`` rows (rows written after the
+        checkpoint that a resume continues from are dropped); atomic."""
+        if not self.exists(self.LOG):
+            if n_rows:
+                raise FormatError(f"{self.log_path}: missing, but the checkpoint was taken "
+                                  f"after {n_rows} rows of it")
+            return
+        text = self.read_bytes(self.LOG, 1 << 30).decode("utf-8", "replace")
+        end = -1
+        for _ in range(1 + n_rows if n_rows else 0):     # header + n rows, one line each
+            end = text.find("\n", end + 1)
+            if end < 0:
+                raise FormatError(f"{self.log_path}: fewer than the {n_rows} rows "
+                                  "the checkpoint was taken after")
+        keep = text[:end + 1]
+        if keep != text:
+            atomic_write_text(self.file(self.LOG), keep)
+        self._fields = None
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float):
+        return repr(v)  # round-trips exactly; inf/nan as 'inf'/'nan'
+    return str(v).replace("\r", " ").replace("\n", " ")
