@@ -171,6 +171,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--only-plugins", action="store_true",
                    help="check only what the --plugins folders add, not the built-ins")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
+    from .compose.command import HELP as COMPOSE_HELP, add_arguments as add_compose_args
+    from .compose.robust_command import HELP as ROBUST_HELP, add_arguments as add_robust_args
+    add_compose_args(sub.add_parser("compose", help=COMPOSE_HELP))
+    add_robust_args(sub.add_parser("robustness", help=ROBUST_HELP))
     return ap
 
 
@@ -511,6 +515,19 @@ def _report(label, fn, arg):
 
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
             "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export}
+
+
+def cmd_compose(args):
+    from .compose.command import run_command
+    return run_command(args)
+
+
+def cmd_robustness(args):
+    from .compose.robust_command import run_command
+    return run_command(args)
+
+
+COMMANDS.update(compose=cmd_compose, robustness=cmd_robustness)
 
 if __name__ == "__main__":
     sys.exit(main())
