@@ -13,7 +13,12 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
     then ops, two ints each: (opcode, operand)
         opcode 0     push clamp(senses[operand])
         opcode 1     push cf[operand]          (a constant)
-        opcode 2+k   apply primitive k of the pset (operand unused, 0)
+        opcode 2     jump: skip the next ``operand`` ops (forward only)
+        opcode 3+k   primitive k of the pset; operand 0: pop all its
+                     arguments, push its result; operand 1 (conditionals
+                     only): pop its selectors, skip j ops where j is the
+                     branch taken -- onto entry j of the jump table that
+                     follows (see ``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.
 
@@ -38,66 +43,95 @@ STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rej
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
 HEADER = 2
-OP_PUSH_SENSE, OP_PUSH_CONST, OP_PRIM0 = 0, 1, 2
+OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PRIM0 = 0, 1, 2, 3
 
 
 def is_erc(node) -> bool:
     return isinstance(node, gp.Terminal) and isinstance(type(node), gp.MetaEphemeral)
 
 
-def compile_tree(tree, info: PsetInfo) -> tuple[list[tuple[int, int]], list[float], int]:
-    """One tree -> (ops [(opcode, operand)], constants, max stack need)."""
-    prim_op = {n: OP_PRIM0 + k for k, n in enumerate(info.primitive_names)}
+def _branch_layout(sel_frags, branch_frags, op):
+    """Lazy conditional: selectors, SELECT, a jump table, then the branches.
+
+    ``sel.. (op, 1) J_0 .. J_{n-1} B_0 J_end B_1 J_end .. B_{n-1}``: SELECT
+    pops the selectors and skips j table entries; J_j jumps to branch j,
+    which pushes the result and jumps past the other branches.
+    """
+    n = len(branch_frags)
+    lens = [len(b) for b in branch_frags]
+    out = [x for f in sel_frags for x in f] + [(op, 1)]
+    for k in range(n):
+        out.append((OP_JUMP, (n - 1 - k) + sum(lens[:k]) + k))
+    for j, b in enumerate(branch_frags):
+        out += b
+        if j < n - 1:
+            out.append((OP_JUMP, sum(lens[j + 1:]) + n - 2 - j))
+    return out
+
+
+def compile_tree(tree, info: PsetInfo, lazy: bool = True
+                 ) -> tuple[list[tuple[int, int]], list[float], int]:
+    """One tree -> (ops [(opcode, operand)], constants, max stack need).
+
+    ``lazy``: conditional primitives evaluate only the branch taken (jumps);
+    otherwise every argument is evaluated (the same value: primitives are pure).
+    """
+    prims = info.primitives
+    prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
     term_sense = dict(zip(info.terminal_names, info.sense_indices))
     nodes = list(tree)
     if not nodes:
         raise ValueError("empty tree")
-    ops: list[tuple[int, int]] = []
-    consts: list[float] = []
-    sp = need = 0
-    # prefix -> postfix: walk nodes right to left; a primitive closes its children
-    pending: list[list[tuple]] = []     # stack of postfix fragments
+    # prefix -> postfix: walk nodes right to left; a primitive closes its children.
+    # pending: stack of (ops, stack need); a constant op carries its value for now
+    pending: list[tuple[list, int]] = []
     for node in reversed(nodes):
         if isinstance(node, gp.Primitive):
             if node.name not in prim_op:
                 raise ValueError(f"primitive {node.name!r} is not in this primitive set")
             if len(pending) < node.arity:
                 raise ValueError("malformed tree (missing arguments)")
+            op, p = prim_op[node.name]
             children = [pending.pop() for _ in range(node.arity)]
-            frag = [x for ch in children for x in ch] + [("p", prim_op[node.name], node.arity)]
-            pending.append(frag)
+            if lazy and p.conditional:
+                sel = [children[i] for i in p.select]
+                br = [children[i] for i in p.branches]
+                ops = _branch_layout([c[0] for c in sel], [c[0] for c in br], op)
+                need = max(max(i + c[1] for i, c in enumerate(sel)), max(c[1] for c in br))
+            else:
+                ops = [x for ch in children for x in ch[0]] + [(op, 0)]
+                need = max(i + c[1] for i, c in enumerate(children))
+            pending.append((ops, need))
         elif is_erc(node):
-            pending.append([("c", float(node.value), 0)])
+            pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1))
         elif isinstance(node, gp.Terminal) and node.value in term_sense:
-            pending.append([("s", term_sense[node.value], 0)])
+            pending.append(([(OP_PUSH_SENSE, term_sense[node.value])], 1))
         else:
             raise ValueError(f"terminal {getattr(node, 'name', node)!r} is not in this primitive set")
     if len(pending) != 1:
         raise ValueError("malformed tree (not exactly one root)")
-    for kind, val, arity in pending[0]:
-        if kind == "s":
-            ops.append((OP_PUSH_SENSE, val))
-            sp += 1
-        elif kind == "c":
-            ops.append((OP_PUSH_CONST, len(consts)))
-            consts.append(clamp(val))
-            sp += 1
-        else:
-            ops.append((val, 0))
-            sp -= arity - 1
-        need = max(need, sp)
+    frag, need = pending[0]
     if need > STACK_CAP:
         raise ValueError(f"tree needs a stack of {need} > {STACK_CAP}; "
                          "lower the depth limit")
+    ops: list[tuple[int, int]] = []
+    consts: list[float] = []
+    for op, arg in frag:
+        if op == OP_PUSH_CONST:
+            ops.append((op, len(consts)))
+            consts.append(arg)
+        else:
+            ops.append((op, arg))
     return ops, consts, need
 
 
-def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int]):
+def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
+                 lazy: bool = True):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:])."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
     n = len(trees)
-    compiled = [compile_tree(_as_tree(t, info), info) for t in trees]
+    compiled = [compile_tree(_as_tree(t, info), info, lazy) for t in trees]
     ci = [n, max((c[2] for c in compiled), default=0)] + [0] * (3 * n)
     cf: list[float] = []
     for k, ((ops, consts, _), act) in enumerate(zip(compiled, actuator_indices)):
@@ -110,15 +144,17 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
-                 actuator_indices: Sequence[int], module: str | None = None) -> ControllerBatch:
+                 actuator_indices: Sequence[int], module: str | None = None,
+                 lazy: bool = True) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
-    ``module`` defaults to the generated interpreter for ``info``.
+    ``module`` defaults to the generated interpreter for ``info``; ``lazy``
+    as in :func:`compile_tree` (the eager form is for benchmarks).
     """
     if module is None:
         from gpmotion.gp.interpreter import interpreter_path
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)

@@ -65,13 +65,14 @@ def pset_hash(primitive_names: Sequence[str], terminal_names: Sequence[str],
 def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | None = None,
                *, sense_names: Sequence[str] | None = None,
                erc_range: tuple[float, float] = (-1.0, 1.0), name: str = "MAIN") -> PsetInfo:
-    """Primitive set over ``primitive_names`` (default: all registered) and terminals.
+    """Primitive set over ``primitive_names`` (default: every registered primitive
+    not declared ``default=False``) and terminals.
 
     ``sense_names`` is the full raw sense vector layout (``Figure.sense_names``);
     when omitted, terminal k reads ``senses[k]``.
     """
     registry.load_builtin()
-    prim_names = tuple(registry.names() if primitive_names is None else primitive_names)
+    prim_names = tuple(registry.default_names() if primitive_names is None else primitive_names)
     for n in prim_names:
         registry.get(n)                       # clear error for unknown names
     if len(set(prim_names)) != len(prim_names):

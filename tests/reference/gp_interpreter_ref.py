@@ -2,36 +2,63 @@
 
 Reads the same (ci, cf) layout (see gpmotion.gp.bytecode) and applies the
 same value rule: senses and primitive results pass through ``clamp``
-(NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.
+(NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.  Opcodes:
+0 push sense, 1 push constant, 2 jump forward, 3 + k primitive k (operand
+0: apply; operand 1: a conditional's selection, which skips j ops onto the
+jump table when branch j is taken).
 """
 from gpmotion.gp.primitives import clamp
 
 
-def run_tree_ref(ci, cf, tree_index, senses, funcs, stack_cap=64):
-    """funcs[k] is the Python function of opcode 2 + k."""
+def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64):
+    """funcs[k] is the Python function of opcode 3 + k; selects[k] its selector
+    positions (empty: not a conditional)."""
+    selects = selects or [()] * len(funcs)
     h = 2 + 3 * tree_index
     pos, n_ops = int(ci[h + 1]), int(ci[h + 2])
+    end = pos + 2 * n_ops
     stack = []
-    for _ in range(n_ops):
+    while pos < end:
         op, arg = int(ci[pos]), int(ci[pos + 1])
         pos += 2
         if op in (0, 1):
             if len(stack) >= stack_cap:
                 return 0.0
             stack.append(clamp(senses[arg]) if op == 0 else float(cf[arg]))
-        elif 2 <= op < 2 + len(funcs):
-            f = funcs[op - 2]
+        elif op == 2:
+            if arg < 0 or pos + 2 * arg > end:
+                return 0.0
+            pos += 2 * arg
+        elif 3 <= op < 3 + len(funcs) and arg == 0:
+            f = funcs[op - 3]
             n = f.__code__.co_argcount
             if len(stack) < n:
                 return 0.0
             args = stack[len(stack) - n:]
             del stack[len(stack) - n:]
             stack.append(clamp(f(*args)))
+        elif 3 <= op < 3 + len(funcs) and arg == 1 and selects[op - 3]:
+            f, sel = funcs[op - 3], selects[op - 3]
+            n = f.__code__.co_argcount
+            if len(stack) < len(sel):
+                return 0.0
+            picked = stack[len(stack) - len(sel):]
+            del stack[len(stack) - len(sel):]
+            branches = [i for i in range(n) if i not in sel]
+            args = [0.0] * n
+            for i, v in zip(sel, picked):
+                args[i] = v
+            for k, i in enumerate(branches):
+                args[i] = float(k)
+            j = f(*args)
+            if j not in range(len(branches)) or pos + 2 * int(j) >= end:
+                return 0.0
+            pos += 2 * int(j)
         else:
             return 0.0
     return stack[0] if len(stack) == 1 else 0.0
 
 
-def control_ref(ci, cf, senses, targets, funcs):
+def control_ref(ci, cf, senses, targets, funcs, selects=None):
     for k in range(int(ci[0])):
-        targets[int(ci[2 + 3 * k])] = run_tree_ref(ci, cf, k, senses, funcs)
+        targets[int(ci[2 + 3 * k])] = run_tree_ref(ci, cf, k, senses, funcs, selects)
