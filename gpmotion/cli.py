@@ -48,6 +48,8 @@ def _add_run_args(p):
                         "ring every 5 generations (default 1)")
     p.add_argument("--elitism", type=int, help="GP elites copied unchanged (default 1)")
     p.add_argument("--max-size", type=int, help="GP nodes per tree cap (default 200)")
+    p.add_argument("--preset", help="GP preset: default | gritz-hahn (the paper's terminals, "
+                   "functions and breeding; lamp tasks); explicit options win")
     p.add_argument("--working", type=int, help="serial search: working controllers C (default 10)")
     p.add_argument("--reseed-every", type=int, help="serial search: reseeding interval (default 200)")
     p.add_argument("--rules", type=int, help="BSR rules per controller")
@@ -185,6 +187,9 @@ def _run_configs(args):
               {"n_working": args.working, "n_generations": args.generations,
                "reseed_every": args.reseed_every})
     fam = {} if gp else {"rules": args.rules, "t_per": args.t_per}
+    if args.preset:
+        from .gp.presets import apply_preset
+        fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
     values = next(iter(series.values())) if series else [None]
     key = next(iter(series)) if series else None
     for seed in range(args.seed, args.seed + args.seeds):

@@ -49,14 +49,19 @@ class GPFamily(Family):
     """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
     name = "gp"
 
-    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1, **options):
+    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
+                 terminals=None, **options):
         # tau: the fixed time constant of GP targets under `kinematic` actuation
-        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair)
+        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair);
+        # terminals: sense names replacing the task's terminal set (a preset's)
         super().__init__(task, primitives=list(primitives) if primitives else None,
                          erc_range=list(erc_range), tau=float(tau), **options)
+        if terminals is not None:
+            self.options["terminals"] = list(terminals)
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
-        self.info = build_pset(task.terminal_names(), primitives,
+        self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
+                               primitives,
                                sense_names=task.fig.sense_names, erc_range=tuple(erc_range))
         self.actuators = task.controlled_actuators()
 

@@ -10,6 +10,9 @@ from gpmotion.model import make_scene
 from gpmotion.task import Task, Term, register_task
 
 ARRIVED = 0.05          # m: "at the target"
+# Gritz & Hahn's lamp terminals: position relative to the goal, velocity, the
+# force the floor puts on the base (its two contact points), time
+PAPER_TERMINALS = ("px", "pz", "vx", "vz", "force_base_back", "force_base_front", "t")
 
 
 def hop_measures(task, traj):
@@ -55,6 +58,7 @@ class LampHop(Task):
     params = {"distance": 0.4, "seconds": 3.0}
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
+    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
 
     def validate(self):
         if not 0.05 <= abs(self.p["distance"]) <= 5.0:

@@ -8,7 +8,8 @@ import numpy as np
 
 from gpmotion.model import make_scene
 from gpmotion.task import Ease, Task, Term, register_task
-from gpmotion.tasks.lamp_hop import ARRIVED, HOP_TERMS, count_hops, hop_measures
+from gpmotion.tasks.lamp_hop import (ARRIVED, HOP_TERMS, PAPER_TERMINALS, count_hops,
+                                     hop_measures)
 
 POLE_RADIUS = 0.01
 
@@ -18,22 +19,34 @@ class LampLimbo(Task):
     name = "lamp_limbo"
     figure = "lamp"
     description = "the lamp hops to a target, passing under a limbo pole"
-    params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42}   # standing, the lamp is 0.50 m tall
+    # pole_start: the pole's height at the start of a run (see curriculum)
+    params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42,   # standing, the lamp is 0.50 m tall
+              "pole_start": 0.60}
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )
-    # The pole comes down over the first half of the run: from above the
-    # standing lamp (0.60 m) to pole_height.  With the full-height pole from
-    # the start most runs settle on standing in front of it (2/5 seeds
-    # solved); lowered gradually, the lamp first learns to hop, then to duck.
-    curriculum = {"pole_height": Ease(0.60, (0.1, 0.5), doc="pole lowered from 0.60 m")}
+
+    @property
+    def curriculum(self):
+        """The pole comes down over the first half of the run: from pole_start
+        (0.60 m, above the standing lamp) to pole_height.  With the full-height
+        pole from the start most runs settle on standing in front of it (2/5
+        seeds solved); lowered gradually, the lamp first learns to hop, then to
+        duck.  ``pole_start=pole_height`` turns the curriculum off."""
+        start = self.p["pole_start"]
+        if start == self.p["pole_height"]:
+            return {}
+        return {"pole_height": Ease(start, (0.1, 0.5), doc=f"pole lowered from {start:g} m")}
+
     success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
+    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
 
     def validate(self):
         if not 0.1 <= self.p["distance"] <= 5.0:
             raise ValueError(f"lamp_limbo: distance must be within 0.1..5 m, got {self.p['distance']}")
-        if not 0.1 <= self.p["pole_height"] <= 1.0:
-            raise ValueError(f"lamp_limbo: pole_height must be within 0.1..1 m, got {self.p['pole_height']}")
+        for k in ("pole_height", "pole_start"):
+            if not 0.1 <= self.p[k] <= 1.0:
+                raise ValueError(f"lamp_limbo: {k} must be within 0.1..1 m, got {self.p[k]}")
 
     def scene(self):
         pole = (self.p["distance"] / 2, self.p["pole_height"] + POLE_RADIUS, POLE_RADIUS)
