@@ -165,7 +165,8 @@ def _count_ops(ci, cf, tree_index, senses, prims) -> int:
             if arg == 0:
                 stack.append(clamp(p.func(*args)))
             else:
-                pos += 2 * int(branch_index(p, args))
+                j = int(branch_index(p, args))
+                pos += 2 * (len(p.branches) - 1 if j == 0 else j - 1)
     return n
 
 

@@ -138,11 +138,11 @@ def test_untaken_branch_is_never_executed(info, kernel):
     tree = tokens_to_tree(["ifpos", "px", "add", "vx", 1.0, "mul", "t", 2.0], info)
     ci, cf = encode_trees([tree], info, [0])
     ops = ci[5:].reshape(-1, 2)
-    # px SELECT J J | vx 1 add J | t 2 mul
-    assert len(ops) == 11 and ops[2, 0] == ops[3, 0] == ops[7, 0] == OP_JUMP
+    # px SELECT J | vx 1 add J | t 2 mul
+    assert len(ops) == 10 and ops[2, 0] == ops[6, 0] == OP_JUMP
     s = np.zeros(len(SENSES))
     s[SENSES.index("vx")], s[SENSES.index("t")] = 2.0, 5.0
-    for poisoned, rows in (("then", slice(4, 7)), ("else", slice(8, 11))):
+    for poisoned, rows in (("then", slice(3, 6)), ("else", slice(7, 10))):
         bad = ci.copy()
         bad[5:].reshape(-1, 2)[rows, 0] = 999
         for px, taken in ((1.0, "then"), (-1.0, "else")):
@@ -267,7 +267,7 @@ def test_malformed_jumps_and_selects_give_zero(info, kernel):
     jumps = [start + 2 * k for k in range(int(ci[4])) if ci[start + 2 * k] == OP_JUMP]
     for bad_arg in (-1, 99):                              # backwards / out of the tree
         bad = ci.copy()
-        bad[jumps[0] + 1] = bad_arg
+        bad[jumps[-1] + 1] = bad_arg                      # the jump after branch 0
         assert kernel.run_tree(bad, cf, 0, s, np.zeros(STACK_CAP)) == 0.0
         assert run_tree_ref(bad, cf, 0, s, *funcs_selects(info)) == 0.0
     add = tokens_to_tree(["add", "px", "vx"], info)       # "select" on a non-conditional

@@ -16,9 +16,8 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
         opcode 2     jump: skip the next ``operand`` ops (forward only)
         opcode 3+k   primitive k of the pset; operand 0: pop all its
                      arguments, push its result; operand 1 (conditionals
-                     only): pop its selectors, skip j ops where j is the
-                     branch taken -- onto entry j of the jump table that
-                     follows (see ``_branch_layout``)
+                     only): pop its selectors and go to the branch taken
+                     through the jump table that follows (``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.
 
@@ -53,14 +52,17 @@ def is_erc(node) -> bool:
 def _branch_layout(sel_frags, branch_frags, op):
     """Lazy conditional: selectors, SELECT, a jump table, then the branches.
 
-    ``sel.. (op, 1) J_0 .. J_{n-1} B_0 J_end B_1 J_end .. B_{n-1}``: SELECT
-    pops the selectors and skips j table entries; J_j jumps to branch j,
-    which pushes the result and jumps past the other branches.
+    ``sel.. (op, 1) J_1 .. J_{n-1} B_0 J_end B_1 J_end .. B_{n-1}``: SELECT
+    pops the selectors; for branch 0 it skips the whole table (falling into
+    B_0), for branch j > 0 it skips j - 1 entries onto J_j, which jumps to
+    B_j.  Each branch but the last then jumps past the others.  So a taken
+    branch costs two ops more than itself (SELECT and one jump) and an
+    untaken one nothing: never more ops than the eager form.
     """
     n = len(branch_frags)
     lens = [len(b) for b in branch_frags]
     out = [x for f in sel_frags for x in f] + [(op, 1)]
-    for k in range(n):
+    for k in range(1, n):
         out.append((OP_JUMP, (n - 1 - k) + sum(lens[:k]) + k))
     for j, b in enumerate(branch_frags):
         out += b

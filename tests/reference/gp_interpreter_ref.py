@@ -4,8 +4,8 @@ Reads the same (ci, cf) layout (see gpmotion.gp.bytecode) and applies the
 same value rule: senses and primitive results pass through ``clamp``
 (NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.  Opcodes:
 0 push sense, 1 push constant, 2 jump forward, 3 + k primitive k (operand
-0: apply; operand 1: a conditional's selection, which skips j ops onto the
-jump table when branch j is taken).
+0: apply; operand 1: a conditional's selection: branch 0 skips the jump
+table that follows, branch j > 0 takes the table's jump j - 1).
 """
 from gpmotion.gp.primitives import clamp
 
@@ -51,9 +51,12 @@ def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64):
             for k, i in enumerate(branches):
                 args[i] = float(k)
             j = f(*args)
-            if j not in range(len(branches)) or pos + 2 * int(j) >= end:
+            if j not in range(len(branches)):
                 return 0.0
-            pos += 2 * int(j)
+            skip = len(branches) - 1 if j == 0 else int(j) - 1   # past the table / onto J_j
+            if pos + 2 * skip >= end:
+                return 0.0
+            pos += 2 * skip
         else:
             return 0.0
     return stack[0] if len(stack) == 1 else 0.0
