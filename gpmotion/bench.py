@@ -145,9 +145,9 @@ def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] | None = Non
 
 def _count_ops(ci, cf, tree_index, senses, prims) -> int:
     """Bytecode ops run_tree executes on one sense vector (plain Python walk)."""
-    from .gp.bytecode import OP_JUMP, OP_PRIM0
+    from .gp.bytecode import HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_SENSE
     from .gp.primitives import branch_index, clamp
-    h = 2 + 3 * tree_index
+    h = HEADER + 3 * tree_index
     pos, end = int(ci[h + 1]), int(ci[h + 1]) + 2 * int(ci[h + 2])
     stack, n = [], 0
     while pos < end:
@@ -156,7 +156,9 @@ def _count_ops(ci, cf, tree_index, senses, prims) -> int:
         if op == OP_JUMP:
             pos += 2 * arg
         elif op < OP_JUMP:
-            stack.append(clamp(senses[arg]) if op == 0 else float(cf[arg]))
+            stack.append(clamp(senses[arg]) if op == OP_PUSH_SENSE else float(cf[arg]))
+        elif op < OP_PRIM0:                     # a subgoal flag (bench trees have none)
+            stack.append(0.0)
         else:
             p = prims[op - OP_PRIM0]
             k = p.arity if arg == 0 else len(p.select)

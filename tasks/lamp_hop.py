@@ -6,6 +6,7 @@ put after arriving, never hit the head or fall over, end at the neutral pose.
 """
 import numpy as np
 
+from gpmotion.gp.subgoals import Subgoal
 from gpmotion.model import make_scene
 from gpmotion.task import Task, Term, register_task
 
@@ -59,6 +60,10 @@ class LampHop(Task):
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
     paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
+
+    def subgoals(self):
+        """Subgoal terminals (GP option ``subgoals``): 1.0 once arrived."""
+        return (Subgoal("arrived", "px", "abs_lt", ARRIVED, doc="base within 5 cm of the target"),)
 
     def validate(self):
         if not 0.05 <= abs(self.p["distance"]) <= 5.0:

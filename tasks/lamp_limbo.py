@@ -6,6 +6,7 @@ penalty for touching it.  Pole height (of its lowest point) is a parameter;
 """
 import numpy as np
 
+from gpmotion.gp.subgoals import Subgoal
 from gpmotion.model import make_scene
 from gpmotion.task import Ease, Task, Term, register_task
 from gpmotion.tasks.lamp_hop import (ARRIVED, HOP_TERMS, PAPER_TERMINALS, count_hops,
@@ -40,6 +41,12 @@ class LampLimbo(Task):
 
     success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
     paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
+
+    def subgoals(self):
+        """Subgoal terminals (GP option ``subgoals``): passed the pole, arrived."""
+        return (Subgoal("passed_pole", "px", "gt", -self.p["distance"] / 2,
+                        doc="base beyond the pole (px is relative to the target)"),
+                Subgoal("arrived", "px", "abs_lt", ARRIVED, doc="base within 5 cm of the target"))
 
     def validate(self):
         if not 0.1 <= self.p["distance"] <= 5.0:

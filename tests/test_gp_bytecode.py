@@ -23,6 +23,7 @@ from gpmotion.gp.bytecode import (MAX_TREE_DEPTH, OP_JUMP, STACK_CAP, encode_bat
                                   encode_trees, tokens_to_tree, tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
+from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 REF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "reference", "gp_interpreter_ref.py")
 _spec = importlib.util.spec_from_file_location("gp_interpreter_ref", REF)
@@ -137,14 +138,14 @@ def test_untaken_branch_is_never_executed(info, kernel):
     value when that branch is taken, and 0.0 (malformed) when the poisoned one is."""
     tree = tokens_to_tree(["ifpos", "px", "add", "vx", 1.0, "mul", "t", 2.0], info)
     ci, cf = encode_trees([tree], info, [0])
-    ops = ci[5:].reshape(-1, 2)
+    ops = ci[6:].reshape(-1, 2)           # after the 3 + 3 header
     # px SELECT J | vx 1 add J | t 2 mul
     assert len(ops) == 10 and ops[2, 0] == ops[6, 0] == OP_JUMP
     s = np.zeros(len(SENSES))
     s[SENSES.index("vx")], s[SENSES.index("t")] = 2.0, 5.0
     for poisoned, rows in (("then", slice(3, 6)), ("else", slice(7, 10))):
         bad = ci.copy()
-        bad[5:].reshape(-1, 2)[rows, 0] = 999
+        bad[6:].reshape(-1, 2)[rows, 0] = 999
         for px, taken in ((1.0, "then"), (-1.0, "else")):
             s[0] = px
             got = kernel.run_tree(bad, cf, 0, s, np.zeros(STACK_CAP))
@@ -152,7 +153,7 @@ def test_untaken_branch_is_never_executed(info, kernel):
             assert got == want, (poisoned, px, got)
             assert run_tree_ref(bad, cf, 0, s, *funcs_selects(info)) == want
     eager, _ = encode_trees([tree], info, [0], lazy=False)   # eager: every op, no jumps
-    assert len(eager[5:]) // 2 == 8 and OP_JUMP not in eager[5::2]
+    assert len(eager[6:]) // 2 == 8 and OP_JUMP not in eager[6::2]
 
 
 def test_batch_control_writes_only_its_actuators(info, kernel, trees):
@@ -160,7 +161,7 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     inds = [trees[i:i + 3] for i in range(0, 30, 3)] + [trees[:1] * 3]
     batch = encode_batch(inds, info, acts)
     assert batch.module == str(interpreter_path(info))
-    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP
+    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS
     funcs, selects = funcs_selects(info)
     s = np.random.default_rng(1).normal(size=len(SENSES))
     for r in range(batch.n_episodes):
@@ -263,8 +264,8 @@ def test_malformed_jumps_and_selects_give_zero(info, kernel):
     ci, cf = encode_trees([tree], info, [0])
     s = np.zeros(len(SENSES))
     assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == 1.0
-    start = int(ci[3])
-    jumps = [start + 2 * k for k in range(int(ci[4])) if ci[start + 2 * k] == OP_JUMP]
+    start = int(ci[4])
+    jumps = [start + 2 * k for k in range(int(ci[5])) if ci[start + 2 * k] == OP_JUMP]
     for bad_arg in (-1, 99):                              # backwards / out of the tree
         bad = ci.copy()
         bad[jumps[-1] + 1] = bad_arg                      # the jump after branch 0

@@ -85,6 +85,28 @@ def test_stop_on_success_waits_for_the_final_scene_and_keeps_a_solver():
     assert off.generation == 5 and not off.stopped
 
 
+def test_cli_preset_expands_into_the_run_config(tmp_path, capsys):
+    from gpmotion import cli
+    args = cli.parser().parse_args(["run", "lamp_limbo", "--preset", "gritz-hahn", "--elitism", "2",
+                                    "--param", "pole_height=0.38,0.34", "--seeds", "2"])
+    cfgs = [c for c, _ in cli._run_configs(args)]
+    assert len(cfgs) == 4
+    for c in cfgs:
+        assert c.family_options == {"primitives": list(PAPER_PRIMITIVES), "terminals": PAPER_TERMS}
+        assert c.search["elitism"] == 2 and c.search["p_mutation"] == 0.0
+        assert c.search["stop_on_success"] is True
+    plain = cli.parser().parse_args(["run", "lamp_hop"])
+    (c, _), = cli._run_configs(plain)
+    assert c.family_options == {} and "stop_on_success" not in c.search
+    for argv, needle in ((["--preset", "nope"], "unknown GP preset"),
+                         (["--preset", "gritz-hahn", "--controller", "bsr-time"], "controller gp")):
+        capsys.readouterr()
+        assert main(["run", "lamp_hop", "--out", str(tmp_path / "x"), *argv, *TINY]) == 2
+        assert needle in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.slow          # compiles a rollout kernel for the paper's primitive set
 def test_cli_preset_runs_and_records_its_expansion(tmp_path, capsys):
     out = tmp_path / "gh"
     assert main(["run", "lamp_hop", "--preset", "gritz-hahn", "--elitism", "1", "--out", str(out),
@@ -96,11 +118,6 @@ def test_cli_preset_runs_and_records_its_expansion(tmp_path, capsys):
     best = json.loads((out / "best.json").read_text())
     used = {tok for tree in best["genome"]["trees"] for tok in tree if isinstance(tok, str)}
     assert used <= set(PAPER_TERMS) | set(PAPER_PRIMITIVES)
-    for argv, needle in ((["--preset", "nope"], "unknown GP preset"),
-                         (["--preset", "gritz-hahn", "--controller", "bsr-time"], "controller gp")):
-        capsys.readouterr()
-        assert main(["run", "lamp_hop", "--out", str(tmp_path / "x"), *argv, *TINY]) == 2
-        assert needle in capsys.readouterr().err
 
 
 def test_limbo_without_curriculum_has_the_pole_at_its_height_from_the_start():

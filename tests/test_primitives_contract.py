@@ -137,7 +137,7 @@ def test_user_conditional_is_lazy_and_agrees_with_deap(registry, tmp_path):
     kernel = load_interpreter(info)
     tree = tokens_to_tree(["pick3", "add", "px", 1.0, "mul", "px", "vx", "vx", "px"], info)
     ci, cf = encode_trees([tree], info, [0])
-    assert OP_JUMP in ci[5::2]
+    assert OP_JUMP in ci[6::2]
     ref = compile_reference(tree, info)
     for px in (-2.0, -0.5, 0.0, 0.5, 0.7, 3.0):
         s = np.array([px, 1.5])

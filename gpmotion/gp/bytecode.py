@@ -7,19 +7,24 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
 
     ci[0]            n_trees
     ci[1]            max stack need over the trees (<= STACK_CAP)
-    ci[2 + 3k + 0]   actuator index driven by tree k
-    ci[2 + 3k + 1]   start offset in ci of tree k's op stream
-    ci[2 + 3k + 2]   number of ops of tree k
+    ci[2]            n_flags: subgoal flags (gpmotion.gp.subgoals)
+    ci[3 + 3k + 0]   actuator index driven by tree k
+    ci[3 + 3k + 1]   start offset in ci of tree k's op stream
+    ci[3 + 3k + 2]   number of ops of tree k
+    ci[3 + 3n + 3j]  subgoal j: sense index, test code, index in cf of its
+                     threshold (n = n_trees)
     then ops, two ints each: (opcode, operand)
         opcode 0     push clamp(senses[operand])
         opcode 1     push cf[operand]          (a constant)
         opcode 2     jump: skip the next ``operand`` ops (forward only)
-        opcode 3+k   primitive k of the pset; operand 0: pop all its
+        opcode 3     push subgoal flag ``operand`` (0.0 or 1.0)
+        opcode 4+k   primitive k of the pset; operand 0: pop all its
                      arguments, push its result; operand 1 (conditionals
                      only): pop its selectors and go to the branch taken
                      through the jump table that follows (``_branch_layout``)
 
-A zero row (padding) has n_trees = 0 and drives nothing.
+A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
+interpreter's stack (STACK_CAP slots) followed by MAX_SUBGOALS flag slots.
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
 prefix list of primitive names, terminal names and numbers (constants).
@@ -37,12 +42,13 @@ from deap import gp
 from gpmotion.controllers import ControllerBatch
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
+from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rejected
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
-HEADER = 2
-OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PRIM0 = 0, 1, 2, 3
+HEADER = 3
+OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PUSH_FLAG, OP_PRIM0 = 0, 1, 2, 3, 4
 
 
 def is_erc(node) -> bool:
@@ -107,7 +113,8 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
         elif is_erc(node):
             pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1))
         elif isinstance(node, gp.Terminal) and node.value in term_sense:
-            pending.append(([(OP_PUSH_SENSE, term_sense[node.value])], 1))
+            i = term_sense[node.value]                 # < 0: subgoal flag -1 - i
+            pending.append(([(OP_PUSH_SENSE, i) if i >= 0 else (OP_PUSH_FLAG, -1 - i)], 1))
         else:
             raise ValueError(f"terminal {getattr(node, 'name', node)!r} is not in this primitive set")
     if len(pending) != 1:
@@ -128,14 +135,22 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
 
 
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
-                 lazy: bool = True):
-    """A list of trees (one per actuator) -> (ci int64[:], cf float64[:])."""
+                 lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = ()):
+    """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
+
+    ``subgoals``: (sense index, test code, threshold) per subgoal flag of
+    ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
+    if len(subgoals) != len(info.flag_names):
+        raise ValueError(f"{len(subgoals)} subgoal tests for {len(info.flag_names)} subgoal terminals")
     n = len(trees)
     compiled = [compile_tree(_as_tree(t, info), info, lazy) for t in trees]
-    ci = [n, max((c[2] for c in compiled), default=0)] + [0] * (3 * n)
+    ci = [n, max((c[2] for c in compiled), default=0), len(subgoals)] + [0] * (3 * n)
     cf: list[float] = []
+    for sense, code, threshold in subgoals:
+        ci += [int(sense), int(code), len(cf)]
+        cf.append(float(threshold))
     for k, ((ops, consts, _), act) in enumerate(zip(compiled, actuator_indices)):
         ci[HEADER + 3 * k: HEADER + 3 * k + 3] = [int(act), len(ci), len(ops)]
         base = len(cf)
@@ -147,7 +162,7 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
-                 lazy: bool = True) -> ControllerBatch:
+                 lazy: bool = True, subgoals=()) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
@@ -156,7 +171,7 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
     if module is None:
         from gpmotion.gp.interpreter import interpreter_path
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)
@@ -164,7 +179,8 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
     for i, (a, b) in enumerate(rows):
         ci[i, :len(a)] = a
         cf[i, :len(b)] = b
-    return ControllerBatch(module=str(module), ci=ci, cf=cf, cstate_size=STACK_CAP)
+    return ControllerBatch(module=str(module), ci=ci, cf=cf,
+                           cstate_size=STACK_CAP + MAX_SUBGOALS)
 
 
 # ---------------------------------------------------------------- tokens
