@@ -384,8 +384,9 @@ def format_report(r: dict) -> str:
              f"{100 * r['airborne_frames']:.0f}%, diverged episodes {r['diverged']}"]
     lb = r.get("lazy_branches")
     if lb:
+        ratio = lb["steps_per_s_lazy"] / lb["steps_per_s_eager"]
         lines.append(f"  lazy branches     {lb['steps_per_s_lazy'] / 1e6:8.3f} M steps/s vs eager "
-                     f"{lb['steps_per_s_eager'] / 1e6:.3f} (x{lb['steps_per_s_lazy'] / lb['steps_per_s_eager']:.2f}); "
+                     f"{lb['steps_per_s_eager'] / 1e6:.3f} (x{ratio:.2f}); "
                      f"interpreter alone {lb['tree_evals_per_s_lazy'] / 1e6:.2f} vs "
                      f"{lb['tree_evals_per_s_eager'] / 1e6:.2f} M tree evals/s "
                      f"(x{lb['tree_evals_per_s_lazy'] / lb['tree_evals_per_s_eager']:.2f}), "

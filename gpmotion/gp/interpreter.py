@@ -143,12 +143,13 @@ def _branch(op: int, p: Primitive) -> str:
             call[pos] = f"stack[i + {k}]"
         for k, pos in enumerate(p.branches):
             call[pos] = f"{float(k)!r}"
+        valid = "".join(f" or r == {float(k)!r}" for k in range(1, nb))   # a branch index
         arm += (f"            elif arg == 1:\n"
                 f"                if sp < {m}:\n"
                 f"                    return 0.0\n"
                 f"                i = sp - {m}\n"
                 f"                r = {p.copy_name}({', '.join(call)})\n"
-                f"                if not (r == 0.0{''.join(f' or r == {float(k)!r}' for k in range(1, nb))}):\n"
+                f"                if not (r == 0.0{valid}):\n"
                 f"                    return 0.0\n"
                 f"                j = int(r)\n"
                 f"                skip = {nb - 1} if j == 0 else j - 1\n"
