@@ -40,10 +40,15 @@ class HermanPoint(Task):
     figure = FIGURE
     description = "Herman points the right arm in a direction and holds it"
     params = {"azimuth": -45.0, "elevation": 0.0, "seconds": 1.5}
+    bounds = {"azimuth": (-180.0, 180.0), "elevation": (-90.0, 90.0)}
+    param_docs = {"azimuth": "pointing direction, degrees left of forward",
+                  "elevation": "pointing direction, degrees above horizontal",
+                  "seconds": "episode length (s)"}
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = f"aim point ({GOAL_REACH} m out)"   # pictures: the scene goal, captioned
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              Term("bent", WEIGHT, phase=(0.2, 0.5),

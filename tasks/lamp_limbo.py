@@ -19,13 +19,20 @@ POLE_RADIUS = 0.01
 class LampLimbo(Task):
     name = "lamp_limbo"
     figure = "lamp"
+    goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target, passing under a limbo pole"
-    # pole_start: the pole's height at the start of a run (see curriculum)
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42,   # standing, the lamp is 0.50 m tall
               "pole_start": 0.60}
+    bounds = {"distance": (0.1, 5.0), "pole_height": (0.1, 1.0), "pole_start": (0.1, 1.0)}
+    param_docs = {"distance": "target x (m); the pole stands halfway",
+                  "pole_height": "height of the pole's underside (m)", "seconds": "episode length (s)",
+                  "pole_start": "the pole's height at the start of a run, lowered to pole_height over "
+                                "the first half (m); = pole_height: no curriculum"}
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )
+    success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
+    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
 
     @property
     def curriculum(self):
@@ -38,9 +45,6 @@ class LampLimbo(Task):
         if start == self.p["pole_height"]:
             return {}
         return {"pole_height": Ease(start, (0.1, 0.5), doc=f"pole lowered from {start:g} m")}
-
-    success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
-    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
 
     def subgoals(self):
         """Subgoal terminals (GP option ``subgoals``): passed the pole, arrived."""
