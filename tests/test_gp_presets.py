@@ -98,10 +98,11 @@ def test_cli_preset_expands_into_the_run_config(tmp_path, capsys):
     plain = cli.parser().parse_args(["run", "lamp_hop"])
     (c, _), = cli._run_configs(plain)
     assert c.family_options == {} and "stop_on_success" not in c.search
-    for argv, needle in ((["--preset", "nope"], "unknown GP preset"),
-                         (["--preset", "gritz-hahn", "--controller", "bsr-time"], "controller gp")):
+    for argv, needle in ((["--preset", "nope", *TINY], "unknown GP preset"),
+                         (["--preset", "gritz-hahn", "--controller", "bsr-time", "--quiet"],
+                          "controller gp")):
         capsys.readouterr()
-        assert main(["run", "lamp_hop", "--out", str(tmp_path / "x"), *argv, *TINY]) == 2
+        assert main(["run", "lamp_hop", "--out", str(tmp_path / "x"), *argv]) == 2
         assert needle in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
 
