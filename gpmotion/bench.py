@@ -38,6 +38,15 @@ Reported (one JSON object with ``--json``):
   some / no ground contact, proof that the workload touches the ground;
 * ``controller`` (``sine`` or ``gp``) and ``tree_nodes`` (node count of
   each GP tree; ``null`` for sine);
+* with ``--controller gp``, ``lazy_branches``: the same trees encoded with
+  lazy conditional branches (the default: only the branch taken runs) and
+  eagerly (every argument evaluated), timed alternately in one run:
+  ``steps_per_s_lazy`` / ``steps_per_s_eager`` (the whole controlled
+  simulation, one thread), ``tree_evals_per_s_lazy`` / ``_eager`` (the
+  interpreter alone, every tree on the senses the simulation recorded),
+  ``ops_per_eval_lazy`` / ``_eager`` (bytecode ops executed per tree
+  evaluation, counted in Python on the same senses), and
+  ``same_targets`` (both forms gave identical targets on every sense);
 * versions, cpu count, figure, episodes, steps.
 
 Timings are wall clock on a shared machine: compare ratios within one run.
@@ -132,6 +141,82 @@ def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] | None = Non
     finally:
         random.setstate(saved)
     return task, fam, trees
+
+
+def _count_ops(ci, cf, tree_index, senses, prims) -> int:
+    """Bytecode ops run_tree executes on one sense vector (plain Python walk)."""
+    from .gp.bytecode import HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_SENSE
+    from .gp.primitives import branch_index, clamp
+    h = HEADER + 3 * tree_index
+    pos, end = int(ci[h + 1]), int(ci[h + 1]) + 2 * int(ci[h + 2])
+    stack, n = [], 0
+    while pos < end:
+        op, arg = int(ci[pos]), int(ci[pos + 1])
+        pos, n = pos + 2, n + 1
+        if op == OP_JUMP:
+            pos += 2 * arg
+        elif op < OP_JUMP:
+            stack.append(clamp(senses[arg]) if op == OP_PUSH_SENSE else float(cf[arg]))
+        elif op < OP_PRIM0:                     # a subgoal flag (bench trees have none)
+            stack.append(0.0)
+        else:
+            p = prims[op - OP_PRIM0]
+            k = p.arity if arg == 0 else len(p.select)
+            args = stack[len(stack) - k:]
+            del stack[len(stack) - k:]
+            if arg == 0:
+                stack.append(clamp(p.func(*args)))
+            else:
+                j = int(branch_index(p, args))
+                pos += 2 * (len(p.branches) - 1 if j == 0 else j - 1)
+    return n
+
+
+def _lazy_vs_eager(fig, scene, fam, trees, episodes, n_steps, q0, qd0, dt, repeats) -> dict:
+    """The same trees, lazy and eager bytecode: whole-simulation steps/s on one
+    thread, interpreter-only tree evaluations/s, ops per evaluation."""
+    import gpmotion
+    from numba import njit
+
+    from .gp.bytecode import encode_batch
+    from .gp.interpreter import load_interpreter
+    kernel = load_interpreter(fam.info)
+    forms = {lz: encode_batch([trees] * episodes, fam.info, fam.actuators, lazy=lz)
+             for lz in (True, False)}
+    tr = gpmotion.rollout(fig, scene, forms[True], n_steps=n_steps, q0=q0, qd0=qd0, dt=dt,
+                          threads=1, record_senses=True)
+    senses = np.ascontiguousarray(tr.senses[0].reshape(-1, tr.senses.shape[-1]), dtype=np.float64)
+
+    @njit(cache=False)
+    def drive(run_tree, ci, cf, n_trees, senses, stack, out):
+        for s in range(senses.shape[0]):
+            for k in range(n_trees):
+                out[s, k] = run_tree(ci, cf, k, senses[s], stack)
+
+    stack = np.zeros(forms[True].cstate_size)
+    outs, best_steps, best_evals = {}, {True: np.inf, False: np.inf}, {True: np.inf, False: np.inf}
+    for lz, b in forms.items():                    # compile both paths before timing
+        outs[lz] = np.zeros((len(senses), len(trees)))
+        drive(kernel.run_tree, b.ci[0], b.cf[0], len(trees), senses, stack, outs[lz])
+    for _ in range(max(1, repeats)):               # alternate: shared-machine noise hits both
+        for lz, b in forms.items():
+            best_steps[lz] = min(best_steps[lz], _best_time(lambda: gpmotion.rollout(
+                fig, scene, b, n_steps=n_steps, q0=q0, qd0=qd0, dt=dt, threads=1), 1))
+            best_evals[lz] = min(best_evals[lz], _best_time(lambda: drive(
+                kernel.run_tree, b.ci[0], b.cf[0], len(trees), senses, stack, outs[lz]), 3))
+    steps = episodes * n_steps
+    evals = len(senses) * len(trees)
+    prims = fam.info.primitives
+    step_idx = range(0, len(senses), max(1, len(senses) // 50))    # 50 frames suffice to count
+    ops = {lz: np.mean([_count_ops(b.ci[0], b.cf[0], k, senses[i], prims)
+                        for i in step_idx for k in range(len(trees))]) for lz, b in forms.items()}
+    return {"steps_per_s_lazy": steps / best_steps[True], "steps_per_s_eager": steps / best_steps[False],
+            "tree_evals_per_s_lazy": evals / best_evals[True],
+            "tree_evals_per_s_eager": evals / best_evals[False],
+            "ops_per_eval_lazy": float(ops[True]), "ops_per_eval_eager": float(ops[False]),
+            "conditionals": sum(tok in [p.name for p in prims if p.conditional]
+                                for t in trees for tok in t),
+            "same_targets": bool(np.array_equal(outs[True], outs[False]))}
 
 
 def _best_time(fn, repeats: int) -> float:
@@ -271,6 +356,9 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
         "machine": platform.machine(),
         "quick": bool(quick),
     }
+    if controller == "gp":
+        result["lazy_branches"] = _lazy_vs_eager(fig, scene, fam, trees, episodes, n_steps,
+                                                 q0, qd0, dt, repeats)
     if warm_start:
         result["warm_start_s"], result["warm_start_inner_s"] = _warm_start(fig.name)
     if gp and fig.name in GP_BENCH_TASKS:
@@ -294,6 +382,17 @@ def format_report(r: dict) -> str:
              f"{r['steps_per_s_all_threads'] / 1e6:8.3f} M steps/s",
              f"  ground contact in {100 * r['contact_frames']:.0f}% of frames, airborne "
              f"{100 * r['airborne_frames']:.0f}%, diverged episodes {r['diverged']}"]
+    lb = r.get("lazy_branches")
+    if lb:
+        ratio = lb["steps_per_s_lazy"] / lb["steps_per_s_eager"]
+        lines.append(f"  lazy branches     {lb['steps_per_s_lazy'] / 1e6:8.3f} M steps/s vs eager "
+                     f"{lb['steps_per_s_eager'] / 1e6:.3f} (x{ratio:.2f}); "
+                     f"interpreter alone {lb['tree_evals_per_s_lazy'] / 1e6:.2f} vs "
+                     f"{lb['tree_evals_per_s_eager'] / 1e6:.2f} M tree evals/s "
+                     f"(x{lb['tree_evals_per_s_lazy'] / lb['tree_evals_per_s_eager']:.2f}), "
+                     f"{lb['ops_per_eval_lazy']:.1f} vs {lb['ops_per_eval_eager']:.1f} ops per tree, "
+                     f"{lb['conditionals']} conditionals, "
+                     f"{'same' if lb['same_targets'] else 'DIFFERENT'} targets")
     if "warm_start_s" in r:
         lines.append(f"  warm start        {r['warm_start_s']:8.3f} s  (import + tiny rollout in a "
                      f"fresh process; {r['warm_start_inner_s']:.3f} s after interpreter start)")

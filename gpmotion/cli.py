@@ -58,6 +58,8 @@ def _add_run_args(p):
     p.add_argument("--actuation", choices=["pd", "kinematic"],
                    help="pd: targets drive PD servos (GP default); kinematic: joints follow "
                         "targets with a time constant τ (BSR default)")
+    p.add_argument("--preset", help="GP preset: default | gritz-hahn (the paper's terminals, "
+                   "functions and breeding; lamp tasks); explicit options win")
     p.add_argument("--figure", metavar="VARIANT.toml",
                    help="run the task on a figure variant, a TOML file or a registered figure "
                         "(it must have the joints, sites, contacts and senses the task uses)")
@@ -264,6 +266,9 @@ def _run_configs(args):
     validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
     search, fam = collect(args, args.controller)
+    if args.preset:
+        from .gp.presets import apply_preset
+        fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
     if args.figure:
         params["figure"] = _figure_variant(args.task, args.figure)
     values = next(iter(series.values())) if series else [None]

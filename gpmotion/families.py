@@ -13,6 +13,7 @@ from .bsr import genome as bsr_genome
 from .bsr import mutation as bsr_mutation
 from .gp import bytecode
 from .gp.pset import build_pset
+from .gp.subgoals import subgoal_table, task_subgoals
 from .task import Task
 
 MAX_TREES = 64
@@ -49,15 +50,26 @@ class GPFamily(Family):
     """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
     name = "gp"
 
-    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1, **options):
+    def __init__(self, task: Task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
+                 terminals=None, subgoals=False, **options):
         # tau: the fixed time constant of GP targets under `kinematic` actuation
-        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair)
+        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair);
+        # terminals: sense names replacing the task's terminal set (a preset's);
+        # subgoals: add the task's subgoal flags as terminals (gpmotion.gp.subgoals)
         super().__init__(task, primitives=list(primitives) if primitives else None,
                          erc_range=list(erc_range), tau=float(tau), **options)
+        if terminals is not None:
+            self.options["terminals"] = list(terminals)
+        goals = task_subgoals(task) if subgoals else ()
+        if subgoals:
+            self.options["subgoals"] = True
+        self.subgoal_table = subgoal_table(goals, task.fig.sense_names)
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
-        self.info = build_pset(task.terminal_names(), primitives,
-                               sense_names=task.fig.sense_names, erc_range=tuple(erc_range))
+        self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
+                               primitives,
+                               sense_names=task.fig.sense_names, erc_range=tuple(erc_range),
+                               flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
 
     @property
@@ -65,7 +77,8 @@ class GPFamily(Family):
         return self.info.pset
 
     def encode(self, genomes):
-        return bytecode.encode_batch(list(genomes), self.info, self.actuators)
+        return bytecode.encode_batch(list(genomes), self.info, self.actuators,
+                                     subgoals=self.subgoal_table)
 
     def to_json(self, genome):
         return {"kind": "gp", "pset": self.info.hash,

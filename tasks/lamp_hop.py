@@ -6,10 +6,14 @@ put after arriving, never hit the head or fall over, end at the neutral pose.
 """
 import numpy as np
 
+from gpmotion.gp.subgoals import Subgoal
 from gpmotion.model import make_scene
 from gpmotion.task import Task, Term, register_task
 
 ARRIVED = 0.05          # m: "at the target"
+# Gritz & Hahn's lamp terminals: position relative to the goal, velocity, the
+# force the floor puts on the base (its two contact points), time
+PAPER_TERMINALS = ("px", "pz", "vx", "vz", "force_base_back", "force_base_front", "t")
 
 
 def hop_measures(task, traj):
@@ -59,6 +63,11 @@ class LampHop(Task):
                   "seconds": "episode length (s)"}
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
+    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
+
+    def subgoals(self):
+        """Subgoal terminals (GP option ``subgoals``): 1.0 once arrived."""
+        return (Subgoal("arrived", "px", "abs_lt", ARRIVED, doc="base within 5 cm of the target"),)
 
     def validate(self):
         if not 0.05 <= abs(self.p["distance"]) <= 5.0:

@@ -47,6 +47,11 @@ def test_gp_controller_bench(capsys):
     assert r["steps_per_s"] > 0 and r["steps_per_s_all_threads"] > 0
     assert r["steps_per_episode"] == 200 and r["diverged"] == 0
     assert "GP trees in-kernel" in bench.format_report(r)
+    lb = r["lazy_branches"]                                      # the same trees, lazy vs eager
+    assert lb["same_targets"] and lb["steps_per_s_lazy"] > 0 and lb["steps_per_s_eager"] > 0
+    assert lb["tree_evals_per_s_lazy"] > 0 and lb["tree_evals_per_s_eager"] > 0
+    assert lb["conditionals"] > 0 and lb["ops_per_eval_lazy"] < lb["ops_per_eval_eager"]
+    assert "lazy branches" in bench.format_report(r)
     # the same trees every time (fixed seed), and DEAP's global random state is left alone
     import random
     state = random.getstate()

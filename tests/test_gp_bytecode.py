@@ -18,10 +18,12 @@ import numpy as np
 import pytest
 from deap import gp
 
-from gpmotion.gp.bytecode import (STACK_CAP, encode_batch, encode_trees, tokens_to_tree,
-                                  tree_to_tokens)
+from gpmotion.gp import primitives as registry
+from gpmotion.gp.bytecode import (MAX_TREE_DEPTH, OP_JUMP, STACK_CAP, encode_batch,
+                                  encode_trees, tokens_to_tree, tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
+from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 REF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "reference", "gp_interpreter_ref.py")
 _spec = importlib.util.spec_from_file_location("gp_interpreter_ref", REF)
@@ -33,9 +35,17 @@ SENSES = ["px", "pz", "vx", "angle_shoulder", "force_head_tip", "t", "unused"]
 TERMS = ["px", "vx", "angle_shoulder", "force_head_tip", "t"]
 
 
+registry.load_builtin()
+ALL = registry.names()          # the default set plus the opt-in ones (ifpos)
+
+
 @pytest.fixture(scope="module")
 def info():
-    return build_pset(TERMS, sense_names=SENSES)
+    return build_pset(TERMS, ALL, sense_names=SENSES)
+
+
+def funcs_selects(info):
+    return [p.func for p in info.primitives], [p.select for p in info.primitives]
 
 
 @pytest.fixture(scope="module")
@@ -63,23 +73,87 @@ def close(a, b):
     return abs(a - b) <= 1e-9 * max(abs(a), abs(b)) + 1e-300
 
 
-def test_interpreter_agrees_with_deap_compile_and_reference(info, kernel, trees):
-    rng = np.random.default_rng(0)
-    funcs = [p.func for p in info.primitives]
+def agree_on(trees, info, kernel, rng):
+    """Lazy and eager bytecode, kernel and plain reference, all equal deap.gp.compile."""
+    funcs, selects = funcs_selects(info)
     stack = np.zeros(STACK_CAP)
-    kinds = set()
     for tree in trees:
-        kinds.update(n.name for n in tree if isinstance(n, gp.Primitive))
-        ci, cf = encode_trees([tree], info, [0])
         ref = compile_reference(tree, info)
+        streams = [encode_trees([tree], info, [0], lazy=lz) for lz in (True, False)]
         for s in sense_vectors(rng):
             want = ref(s)
-            got = kernel.run_tree(ci, cf, 0, s, stack)
-            plain = run_tree_ref(ci, cf, 0, s, funcs)
-            assert math.isfinite(got) and abs(got) <= 1e6
-            assert close(got, want), (str(tree), s, got, want)
-            assert close(plain, want), (str(tree), s, plain, want)
+            for ci, cf in streams:
+                got = kernel.run_tree(ci, cf, 0, s, stack)
+                plain = run_tree_ref(ci, cf, 0, s, funcs, selects)
+                assert math.isfinite(got) and abs(got) <= 1e6
+                assert close(got, want), (str(tree), s, got, want)
+                assert close(plain, want), (str(tree), s, plain, want)
+
+
+def test_interpreter_agrees_with_deap_compile_and_reference(info, kernel, trees):
+    agree_on(trees, info, kernel, np.random.default_rng(0))
+    kinds = {n.name for t in trees for n in t if isinstance(n, gp.Primitive)}
     assert kinds == set(info.primitive_names)     # every primitive exercised
+
+
+def deep_tree(pset, depth, rng, p_cond=0.7):
+    """A random tree of height exactly ``depth``: a spine of mostly conditionals
+    (the deep child in a random argument slot: selector or branch), the other
+    arguments small random subtrees, so conditionals nest in every position."""
+    prims = [p for ps in pset.primitives.values() for p in ps]
+    conds = [p for p in prims if registry.get(p.name).conditional]
+    nodes = []
+
+    def grow(d, spine):
+        if d == 0:
+            nodes.append(pset.terminals[pset.ret][rng.randrange(len(pset.terminals[pset.ret]))])
+            if isinstance(nodes[-1], type):           # the ERC class: draw a constant
+                nodes[-1] = nodes[-1]()
+            return
+        if not spine and rng.random() < 0.5:
+            return grow(0, False)
+        p = rng.choice(conds if spine and rng.random() < p_cond else prims)
+        nodes.append(p)
+        deep = rng.randrange(p.arity) if spine else -1
+        for i in range(p.arity):
+            grow(d - 1 if i == deep else min(d - 1, 2), i == deep)
+
+    grow(depth, True)
+    return gp.PrimitiveTree(nodes)
+
+
+def test_nested_conditionals_at_max_depth_agree(info, kernel):
+    rng = random.Random(7)
+    trees = [deep_tree(info.pset, MAX_TREE_DEPTH, rng) for _ in range(60)]
+    assert all(t.height == MAX_TREE_DEPTH for t in trees)
+    assert max(sum(registry.get(n.name).conditional for n in t if isinstance(n, gp.Primitive))
+               for t in trees) >= 12
+    for t in trees:                         # they round-trip through the token parser's caps
+        tokens_to_tree(tree_to_tokens(t), info)
+    agree_on(trees, info, kernel, np.random.default_rng(3))
+
+
+def test_untaken_branch_is_never_executed(info, kernel):
+    """Poison the ops of one branch: the lazy kernel returns the other branch's
+    value when that branch is taken, and 0.0 (malformed) when the poisoned one is."""
+    tree = tokens_to_tree(["ifpos", "px", "add", "vx", 1.0, "mul", "t", 2.0], info)
+    ci, cf = encode_trees([tree], info, [0])
+    ops = ci[6:].reshape(-1, 2)           # after the 3 + 3 header
+    # px SELECT J | vx 1 add J | t 2 mul
+    assert len(ops) == 10 and ops[2, 0] == ops[6, 0] == OP_JUMP
+    s = np.zeros(len(SENSES))
+    s[SENSES.index("vx")], s[SENSES.index("t")] = 2.0, 5.0
+    for poisoned, rows in (("then", slice(3, 6)), ("else", slice(7, 10))):
+        bad = ci.copy()
+        bad[6:].reshape(-1, 2)[rows, 0] = 999
+        for px, taken in ((1.0, "then"), (-1.0, "else")):
+            s[0] = px
+            got = kernel.run_tree(bad, cf, 0, s, np.zeros(STACK_CAP))
+            want = 0.0 if taken == poisoned else (3.0 if taken == "then" else 10.0)
+            assert got == want, (poisoned, px, got)
+            assert run_tree_ref(bad, cf, 0, s, *funcs_selects(info)) == want
+    eager, _ = encode_trees([tree], info, [0], lazy=False)   # eager: every op, no jumps
+    assert len(eager[6:]) // 2 == 8 and OP_JUMP not in eager[6::2]
 
 
 def test_batch_control_writes_only_its_actuators(info, kernel, trees):
@@ -87,8 +161,8 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     inds = [trees[i:i + 3] for i in range(0, 30, 3)] + [trees[:1] * 3]
     batch = encode_batch(inds, info, acts)
     assert batch.module == str(interpreter_path(info))
-    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP
-    funcs = [p.func for p in info.primitives]
+    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS
+    funcs, selects = funcs_selects(info)
     s = np.random.default_rng(1).normal(size=len(SENSES))
     for r in range(batch.n_episodes):
         cstate = np.full(batch.cstate_size, 7.0)
@@ -98,7 +172,7 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
         taus = np.full(5, 0.1)
         kernel.control(batch.ci[r], batch.cf[r], s, s, 0.0, cstate, targets, taus)
         want = np.full(5, -9.0)
-        control_ref(batch.ci[r], batch.cf[r], s, want, funcs)
+        control_ref(batch.ci[r], batch.cf[r], s, want, funcs, selects)
         assert np.allclose(targets, want, rtol=1e-9, atol=0)
         assert targets[1] == -9.0 and targets[4] == -9.0 and (taus == 0.1).all()
         for k, a in enumerate(acts):
@@ -119,14 +193,19 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     (["sin", "px"], {"px": np.nan}, 0.0),                            # NaN sense -> 0
     (["div", "px", 0.0], {"px": 1e300}, 1.0),
     (["t"], {"t": 1e300}, 1e6),
+    (["ifpos", "px", 1.0, -1.0], {"px": 0.0}, -1.0),                 # zero is not positive
+    (["ifpos", "px", 1.0, -1.0], {"px": 1e-12}, 1.0),
+    (["ifpos", "px", 1.0, -1.0], {"px": np.nan}, -1.0),              # NaN sense reads 0
+    (["ifpos", "px", "vx", "div", "px", 0.0], {"px": -2.0, "vx": 4.0}, 1.0),
 ])
 def test_semantics_cases(info, kernel, tokens, senses, want):
     s = np.zeros(len(SENSES))
     for name, v in senses.items():
         s[SENSES.index(name)] = v
     tree = tokens_to_tree(tokens, info)
-    ci, cf = encode_trees([tree], info, [0])
-    assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == want
+    for lazy in (True, False):
+        ci, cf = encode_trees([tree], info, [0], lazy=lazy)
+        assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == want
     assert compile_reference(tree, info)(s) == want
 
 
@@ -163,13 +242,39 @@ def test_bad_tokens_rejected(info, tokens, message):
 
 
 def test_stack_cap_enforced(info):
-    tokens = ["iflte", "px", "px", "px"] * 22 + ["px"]   # right-nested: needs 3*22+1 slots
+    tokens = ["iflte", "px", "px", "px"] * 22 + ["px"]   # nested in the last branch
     tree = tokens_to_tree(tokens, info, max_depth=30)
-    with pytest.raises(ValueError, match="stack"):
-        encode_trees([tree], info, [0])
+    with pytest.raises(ValueError, match="stack"):       # eager: 3*22+1 slots
+        encode_trees([tree], info, [0], lazy=False)
+    ci, _ = encode_trees([tree], info, [0])              # lazy: a branch starts where
+    assert ci[1] == 2                                    # its selectors were popped
     ok = tokens_to_tree(["iflte", "px", "px", "px"] * 20 + ["px"], info, max_depth=30)
-    ci, _ = encode_trees([ok], info, [0])
+    ci, _ = encode_trees([ok], info, [0], lazy=False)
     assert ci[1] == 61
+    # nested in a selector, the lazy form needs a slot per level too
+    deep = tokens_to_tree(["iflte", "px"] * 64 + ["px"] + ["px", "px"] * 64, info, max_depth=70)
+    with pytest.raises(ValueError, match="stack of 65"):
+        encode_trees([deep], info, [0])
+    within = tokens_to_tree(["iflte", "px"] * 63 + ["px"] + ["px", "px"] * 63, info, max_depth=70)
+    assert encode_trees([within], info, [0])[0][1] == 64
+
+
+def test_malformed_jumps_and_selects_give_zero(info, kernel):
+    tree = tokens_to_tree(["iflte", "px", "vx", 1.0, 2.0], info)
+    ci, cf = encode_trees([tree], info, [0])
+    s = np.zeros(len(SENSES))
+    assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == 1.0
+    start = int(ci[4])
+    jumps = [start + 2 * k for k in range(int(ci[5])) if ci[start + 2 * k] == OP_JUMP]
+    for bad_arg in (-1, 99):                              # backwards / out of the tree
+        bad = ci.copy()
+        bad[jumps[-1] + 1] = bad_arg                      # the jump after branch 0
+        assert kernel.run_tree(bad, cf, 0, s, np.zeros(STACK_CAP)) == 0.0
+        assert run_tree_ref(bad, cf, 0, s, *funcs_selects(info)) == 0.0
+    add = tokens_to_tree(["add", "px", "vx"], info)       # "select" on a non-conditional
+    ci, cf = encode_trees([add], info, [0])
+    ci[-1] = 1
+    assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == 0.0
 
 
 def test_terminals_must_be_senses():
@@ -178,11 +283,13 @@ def test_terminals_must_be_senses():
 
 
 def test_pset_rebuild_in_one_process(info):
-    again = build_pset(TERMS, sense_names=SENSES)
+    again = build_pset(TERMS, ALL, sense_names=SENSES)
     assert again.hash == info.hash and again.erc_name == info.erc_name
     other = build_pset(["px"], ["add", "sin"], sense_names=SENSES)
     assert other.hash != info.hash and other.erc_name != info.erc_name
     assert "prim_iflte" not in interpreter_source(other)
+    default = build_pset(TERMS, sense_names=SENSES)       # opt-in primitives stay out
+    assert "ifpos" not in default.primitive_names and "iflte" in default.primitive_names
 
 
 def test_kernels_run_without_jit(info, trees, tmp_path):
@@ -198,19 +305,20 @@ def test_kernels_run_without_jit(info, trees, tmp_path):
         ref = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(ref)
         control_ref = ref.control_ref
-        info = build_pset({TERMS!r}, sense_names={SENSES!r})
+        info = build_pset({TERMS!r}, {ALL!r}, sense_names={SENSES!r})
         k = load_interpreter(info)
         assert not hasattr(k.run_tree, "py_func"), "JIT not disabled"
         progs = json.load(open({str(tmp_path / "progs.json")!r}))
         batch = encode_batch([progs[i:i + 2] for i in range(0, 40, 2)], info, [0, 1])
         funcs = [p.func for p in info.primitives]
+        selects = [p.select for p in info.primitives]
         s = np.array([0.5, -1.0, 0.0, 2.0, 1e300, np.nan, 3.0])
         cstate = np.zeros(batch.cstate_size)
         for r in range(batch.n_episodes):
             got, want = np.zeros(2), np.zeros(2)
             k.init(batch.ci[r], batch.cf[r], cstate)
             k.control(batch.ci[r], batch.cf[r], s, s, 0.0, cstate, got, got.copy())
-            control_ref(batch.ci[r], batch.cf[r], s, want, funcs)
+            control_ref(batch.ci[r], batch.cf[r], s, want, funcs, selects)
             assert np.allclose(got, want, rtol=1e-12, atol=0), (r, got, want)
         print("ok")
     """)

@@ -34,8 +34,12 @@ def registry(monkeypatch):
 
 
 def test_builtin_set_is_complete():
-    assert {"add", "sub", "mul", "div", "iflte", "sin", "cos", "abs"} <= set(BUILTIN)
+    assert {"add", "sub", "mul", "div", "iflte", "ifpos", "sin", "cos", "abs"} <= set(BUILTIN)
     assert primitives.get("div").symbol == "%" and primitives.get("iflte").arity == 4
+    assert primitives.get("iflte").select == (0, 1) and primitives.get("iflte").branches == (2, 3)
+    assert primitives.get("ifpos").select == (0,) and primitives.get("ifpos").arity == 3
+    assert "ifpos" not in primitives.default_names()          # opt-in: default runs unchanged
+    assert set(primitives.default_names()) == set(BUILTIN) - {"ifpos"}
     import gpmotion.primitives as builtin_package           # the folder form is the same set
     assert primitives.load_plugins(builtin_package.__path__[0]) == []
 
@@ -43,6 +47,7 @@ def test_builtin_set_is_complete():
 @pytest.mark.parametrize("name, args, want", [
     ("div", (3.0, 0.0), 1.0), ("div", (3.0, 5e-10), 1.0), ("div", (3.0, -2.0), -1.5),
     ("iflte", (1.0, 1.0, 2.0, 3.0), 2.0), ("iflte", (1.5, 1.0, 2.0, 3.0), 3.0),
+    ("ifpos", (1e-9, 2.0, 3.0), 2.0), ("ifpos", (0.0, 2.0, 3.0), 3.0), ("ifpos", (-1.0, 2.0, 3.0), 3.0),
     ("sin", (math.inf,), 0.0), ("cos", (math.nan,), 0.0), ("cos", (0.0,), 1.0),
     ("abs", (-2.5,), 2.5), ("sub", (1.0, 3.0), -2.0),
 ])
@@ -101,3 +106,65 @@ def test_register_rejects_bad_declarations(registry):
         primitives.register("zero", lambda: 1.0, 0)
     with pytest.raises(ValueError, match="unknown primitive 'nope'"):
         primitives.get("nope")
+
+
+# A user conditional whose selector is its LAST argument and that has three branches.
+PICK3 = '''
+from gpmotion.gp.primitives import primitive
+
+
+@primitive("pick3", arity=4, select=(3,))
+def pick3(a, b, c, s):
+    if s < -0.5:
+        return a
+    if s <= 0.5:
+        return b
+    return c
+'''
+
+
+def test_user_conditional_is_lazy_and_agrees_with_deap(registry, tmp_path):
+    from deap import gp
+
+    from gpmotion.gp.bytecode import OP_JUMP
+    from gpmotion.gp.pset import compile_reference
+    (tmp_path / "pick3.py").write_text(PICK3)
+    assert primitives.load_plugins(tmp_path) == ["pick3"]
+    check_primitive("pick3")
+    p = primitives.get("pick3")
+    assert p.select == (3,) and p.branches == (0, 1, 2) and p.default
+    info = build_pset(["px", "vx"], ["add", "mul", "pick3"])
+    kernel = load_interpreter(info)
+    tree = tokens_to_tree(["pick3", "add", "px", 1.0, "mul", "px", "vx", "vx", "px"], info)
+    ci, cf = encode_trees([tree], info, [0])
+    assert OP_JUMP in ci[6::2]
+    ref = compile_reference(tree, info)
+    for px in (-2.0, -0.5, 0.0, 0.5, 0.7, 3.0):
+        s = np.array([px, 1.5])
+        for lazy in (True, False):
+            ci, cf = encode_trees([tree], info, [0], lazy=lazy)
+            assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == ref(s)
+    import random
+    random.seed(5)
+    for _ in range(100):
+        t = gp.PrimitiveTree(gp.genHalfAndHalf(info.pset, 1, 5))
+        f = compile_reference(t, info)
+        ci, cf = encode_trees([t], info, [0])
+        for s in ([0.3, -0.6], [1.0, 0.0], [-1.0, 2.0]):
+            s = np.array(s)
+            assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == pytest.approx(f(s), rel=1e-12)
+
+
+@pytest.mark.parametrize("body, select, message", [
+    ("def c(a, b, x):\n    return a + b if x > 0 else b\n", 1, "branch arguments unchanged"),
+    ("def c(x, b, d):\n    return b if d > x else d\n", 1, "branch arguments unchanged"),  # reads a branch
+    ("def c(x, b, d):\n    return b if x > 0 else d\n", 3, "select must name"),
+    ("def c(x, b, d):\n    return b if x > 0 else d\n", (0, 0), "select must name"),
+    ("def c(x, b, d):\n    return b if x > 0 else d\n", True, "select must be"),
+])
+def test_bad_conditional_declarations(registry, body, select, message, tmp_path):
+    (tmp_path / "c.py").write_text(
+        "from gpmotion.gp.primitives import register\n" + body
+        + f"register('c', c, arity=3, select={select!r})\n")
+    with pytest.raises(ValueError, match=message):
+        primitives.load_plugins(tmp_path)

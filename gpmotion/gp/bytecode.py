@@ -7,15 +7,24 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
 
     ci[0]            n_trees
     ci[1]            max stack need over the trees (<= STACK_CAP)
-    ci[2 + 3k + 0]   actuator index driven by tree k
-    ci[2 + 3k + 1]   start offset in ci of tree k's op stream
-    ci[2 + 3k + 2]   number of ops of tree k
+    ci[2]            n_flags: subgoal flags (gpmotion.gp.subgoals)
+    ci[3 + 3k + 0]   actuator index driven by tree k
+    ci[3 + 3k + 1]   start offset in ci of tree k's op stream
+    ci[3 + 3k + 2]   number of ops of tree k
+    ci[3 + 3n + 3j]  subgoal j: sense index, test code, index in cf of its
+                     threshold (n = n_trees)
     then ops, two ints each: (opcode, operand)
         opcode 0     push clamp(senses[operand])
         opcode 1     push cf[operand]          (a constant)
-        opcode 2+k   apply primitive k of the pset (operand unused, 0)
+        opcode 2     jump: skip the next ``operand`` ops (forward only)
+        opcode 3     push subgoal flag ``operand`` (0.0 or 1.0)
+        opcode 4+k   primitive k of the pset; operand 0: pop all its
+                     arguments, push its result; operand 1 (conditionals
+                     only): pop its selectors and go to the branch taken
+                     through the jump table that follows (``_branch_layout``)
 
-A zero row (padding) has n_trees = 0 and drives nothing.
+A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
+interpreter's stack (STACK_CAP slots) followed by MAX_SUBGOALS flag slots.
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
 prefix list of primitive names, terminal names and numbers (constants).
@@ -33,73 +42,115 @@ from deap import gp
 from gpmotion.controllers import ControllerBatch
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
+from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rejected
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
-HEADER = 2
-OP_PUSH_SENSE, OP_PUSH_CONST, OP_PRIM0 = 0, 1, 2
+HEADER = 3
+OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PUSH_FLAG, OP_PRIM0 = 0, 1, 2, 3, 4
 
 
 def is_erc(node) -> bool:
     return isinstance(node, gp.Terminal) and isinstance(type(node), gp.MetaEphemeral)
 
 
-def compile_tree(tree, info: PsetInfo) -> tuple[list[tuple[int, int]], list[float], int]:
-    """One tree -> (ops [(opcode, operand)], constants, max stack need)."""
-    prim_op = {n: OP_PRIM0 + k for k, n in enumerate(info.primitive_names)}
+def _branch_layout(sel_frags, branch_frags, op):
+    """Lazy conditional: selectors, SELECT, a jump table, then the branches.
+
+    ``sel.. (op, 1) J_1 .. J_{n-1} B_0 J_end B_1 J_end .. B_{n-1}``: SELECT
+    pops the selectors; for branch 0 it skips the whole table (falling into
+    B_0), for branch j > 0 it skips j - 1 entries onto J_j, which jumps to
+    B_j.  Each branch but the last then jumps past the others.  So a taken
+    branch costs two ops more than itself (SELECT and one jump) and an
+    untaken one nothing: never more ops than the eager form.
+    """
+    n = len(branch_frags)
+    lens = [len(b) for b in branch_frags]
+    out = [x for f in sel_frags for x in f] + [(op, 1)]
+    for k in range(1, n):
+        out.append((OP_JUMP, (n - 1 - k) + sum(lens[:k]) + k))
+    for j, b in enumerate(branch_frags):
+        out += b
+        if j < n - 1:
+            out.append((OP_JUMP, sum(lens[j + 1:]) + n - 2 - j))
+    return out
+
+
+def compile_tree(tree, info: PsetInfo, lazy: bool = True
+                 ) -> tuple[list[tuple[int, int]], list[float], int]:
+    """One tree -> (ops [(opcode, operand)], constants, max stack need).
+
+    ``lazy``: conditional primitives evaluate only the branch taken (jumps);
+    otherwise every argument is evaluated (the same value: primitives are pure).
+    """
+    prims = info.primitives
+    prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
     term_sense = dict(zip(info.terminal_names, info.sense_indices))
     nodes = list(tree)
     if not nodes:
         raise ValueError("empty tree")
-    ops: list[tuple[int, int]] = []
-    consts: list[float] = []
-    sp = need = 0
-    # prefix -> postfix: walk nodes right to left; a primitive closes its children
-    pending: list[list[tuple]] = []     # stack of postfix fragments
+    # prefix -> postfix: walk nodes right to left; a primitive closes its children.
+    # pending: stack of (ops, stack need); a constant op carries its value for now
+    pending: list[tuple[list, int]] = []
     for node in reversed(nodes):
         if isinstance(node, gp.Primitive):
             if node.name not in prim_op:
                 raise ValueError(f"primitive {node.name!r} is not in this primitive set")
             if len(pending) < node.arity:
                 raise ValueError("malformed tree (missing arguments)")
+            op, p = prim_op[node.name]
             children = [pending.pop() for _ in range(node.arity)]
-            frag = [x for ch in children for x in ch] + [("p", prim_op[node.name], node.arity)]
-            pending.append(frag)
+            if lazy and p.conditional:
+                sel = [children[i] for i in p.select]
+                br = [children[i] for i in p.branches]
+                ops = _branch_layout([c[0] for c in sel], [c[0] for c in br], op)
+                need = max(max(i + c[1] for i, c in enumerate(sel)), max(c[1] for c in br))
+            else:
+                ops = [x for ch in children for x in ch[0]] + [(op, 0)]
+                need = max(i + c[1] for i, c in enumerate(children))
+            pending.append((ops, need))
         elif is_erc(node):
-            pending.append([("c", float(node.value), 0)])
+            pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1))
         elif isinstance(node, gp.Terminal) and node.value in term_sense:
-            pending.append([("s", term_sense[node.value], 0)])
+            i = term_sense[node.value]                 # < 0: subgoal flag -1 - i
+            pending.append(([(OP_PUSH_SENSE, i) if i >= 0 else (OP_PUSH_FLAG, -1 - i)], 1))
         else:
             raise ValueError(f"terminal {getattr(node, 'name', node)!r} is not in this primitive set")
     if len(pending) != 1:
         raise ValueError("malformed tree (not exactly one root)")
-    for kind, val, arity in pending[0]:
-        if kind == "s":
-            ops.append((OP_PUSH_SENSE, val))
-            sp += 1
-        elif kind == "c":
-            ops.append((OP_PUSH_CONST, len(consts)))
-            consts.append(clamp(val))
-            sp += 1
-        else:
-            ops.append((val, 0))
-            sp -= arity - 1
-        need = max(need, sp)
+    frag, need = pending[0]
     if need > STACK_CAP:
         raise ValueError(f"tree needs a stack of {need} > {STACK_CAP}; "
                          "lower the depth limit")
+    ops: list[tuple[int, int]] = []
+    consts: list[float] = []
+    for op, arg in frag:
+        if op == OP_PUSH_CONST:
+            ops.append((op, len(consts)))
+            consts.append(arg)
+        else:
+            ops.append((op, arg))
     return ops, consts, need
 
 
-def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int]):
-    """A list of trees (one per actuator) -> (ci int64[:], cf float64[:])."""
+def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
+                 lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = ()):
+    """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
+
+    ``subgoals``: (sense index, test code, threshold) per subgoal flag of
+    ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
+    if len(subgoals) != len(info.flag_names):
+        raise ValueError(f"{len(subgoals)} subgoal tests for {len(info.flag_names)} subgoal terminals")
     n = len(trees)
-    compiled = [compile_tree(_as_tree(t, info), info) for t in trees]
-    ci = [n, max((c[2] for c in compiled), default=0)] + [0] * (3 * n)
+    compiled = [compile_tree(_as_tree(t, info), info, lazy) for t in trees]
+    ci = [n, max((c[2] for c in compiled), default=0), len(subgoals)] + [0] * (3 * n)
     cf: list[float] = []
+    for sense, code, threshold in subgoals:
+        ci += [int(sense), int(code), len(cf)]
+        cf.append(float(threshold))
     for k, ((ops, consts, _), act) in enumerate(zip(compiled, actuator_indices)):
         ci[HEADER + 3 * k: HEADER + 3 * k + 3] = [int(act), len(ci), len(ops)]
         base = len(cf)
@@ -110,15 +161,17 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
-                 actuator_indices: Sequence[int], module: str | None = None) -> ControllerBatch:
+                 actuator_indices: Sequence[int], module: str | None = None,
+                 lazy: bool = True, subgoals=()) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
-    ``module`` defaults to the generated interpreter for ``info``.
+    ``module`` defaults to the generated interpreter for ``info``; ``lazy``
+    as in :func:`compile_tree` (the eager form is for benchmarks).
     """
     if module is None:
         from gpmotion.gp.interpreter import interpreter_path
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)
@@ -126,7 +179,8 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
     for i, (a, b) in enumerate(rows):
         ci[i, :len(a)] = a
         cf[i, :len(b)] = b
-    return ControllerBatch(module=str(module), ci=ci, cf=cf, cstate_size=STACK_CAP)
+    return ControllerBatch(module=str(module), ci=ci, cf=cf,
+                           cstate_size=STACK_CAP + MAX_SUBGOALS)
 
 
 # ---------------------------------------------------------------- tokens

@@ -22,6 +22,22 @@ Numeric semantics (shared by the interpreter, the DEAP primitive set and the
 plain reference): every value on the interpreter's stack is finite and lies
 in ``[-CLAMP, CLAMP]`` -- each sense pushed and each primitive result passes
 through :func:`clamp` (NaN -> 0.0, otherwise saturate to +-1e6).
+
+Conditionals: a primitive declares ``select`` -- which of its arguments
+choose (``select=2``: the first two; or a tuple of positions) -- and must
+return one of its other (branch) arguments *unchanged*, picked by the
+selectors alone::
+
+    @primitive("iflte", arity=4, select=2)
+    def iflte(a, b, c, d):
+        return c if a <= b else d
+
+The interpreter then evaluates only the branch taken (jumps over the
+others in the bytecode), so an untaken branch costs nothing.  It finds the
+branch by calling the function with the branch arguments replaced by their
+indices 0.0, 1.0, ...; :func:`register` checks the selector rule on sample
+values.  ``default=False`` keeps a primitive out of the default set (a task
+or preset must name it).
 """
 from __future__ import annotations
 
@@ -30,6 +46,7 @@ import importlib
 import importlib.util
 import inspect
 import keyword
+import math
 import sys
 import textwrap
 from dataclasses import dataclass
@@ -59,10 +76,21 @@ class Primitive:
     source: str          # decorator-free, renamed copy: ``def prim_<name>(...)``
     imports: str         # module-level import lines of the plugin file
     file: str
+    select: tuple[int, ...] = ()   # selector argument positions; () = not a conditional
+    default: bool = True           # in the default primitive set
 
     @property
     def copy_name(self) -> str:
         return f"prim_{self.name}"
+
+    @property
+    def conditional(self) -> bool:
+        return bool(self.select)
+
+    @property
+    def branches(self) -> tuple[int, ...]:
+        """Argument positions of the branches (a conditional evaluates one)."""
+        return tuple(i for i in range(self.arity) if i not in self.select) if self.select else ()
 
 
 _REGISTRY: dict[str, Primitive] = {}
@@ -99,8 +127,63 @@ def _copy_source(name: str, func: Callable) -> tuple[str, str]:
     return ast.unparse(fn) + "\n", "\n".join(imports)
 
 
-def register(name: str, func: Callable, arity: int, symbol: str | None = None) -> Primitive:
-    """Register ``func`` as primitive ``name``; a duplicate from another file is an error."""
+def _select_positions(name: str, select, arity: int) -> tuple[int, ...]:
+    """``select`` (None, a leading count or positions) -> sorted positions."""
+    if select is None:
+        return ()
+    if isinstance(select, bool):
+        raise ValueError(f"primitive {name!r}: select must be a count or positions, got {select!r}")
+    pos = tuple(range(select)) if isinstance(select, int) else tuple(select)
+    if (not pos or not all(isinstance(i, int) and not isinstance(i, bool) for i in pos)
+            or len(set(pos)) != len(pos) or not all(0 <= i < arity for i in pos)
+            or len(pos) >= arity):
+        raise ValueError(f"primitive {name!r}: select must name 1..{arity - 1} distinct argument "
+                         f"positions in 0..{arity - 1} (the rest are branches), got {select!r}")
+    return tuple(sorted(pos))
+
+
+# selector samples: ties, signs, zero, the clamp
+_SELECT_SAMPLES = (0.0, 1.0, -1.0, 0.5, -0.5, 1e-9, 2.0, 1e6, -1e6)
+
+
+def branch_index(prim: Primitive, selectors) -> float:
+    """What the interpreter computes: the function with branch k replaced by k."""
+    args = [0.0] * prim.arity
+    for i, v in zip(prim.select, selectors):
+        args[i] = float(v)
+    for k, i in enumerate(prim.branches):
+        args[i] = float(k)
+    return prim.func(*args)
+
+
+def _check_selector(prim: Primitive) -> None:
+    """A conditional returns one branch argument unchanged, chosen by its selectors."""
+    import itertools
+    m = len(prim.select)
+    samples = _SELECT_SAMPLES if m <= 2 else _SELECT_SAMPLES[:4]
+    for sel in itertools.product(samples, repeat=m):
+        k = branch_index(prim, sel)
+        ok = (isinstance(k, (int, float)) and math.isfinite(k) and k == int(k)
+              and 0 <= k < len(prim.branches))
+        if ok:
+            args = [0.0] * prim.arity
+            for i, v in zip(prim.select, sel):
+                args[i] = v
+            values = [3.25 + 7.5 * j for j in range(len(prim.branches))]
+            for i, v in zip(prim.branches, values):
+                args[i] = v
+            ok = prim.func(*args) == values[int(k)]
+        if not ok:
+            raise ValueError(f"conditional primitive {prim.name!r}: with selectors {sel} it does not "
+                             "return one of its branch arguments unchanged, chosen by the selectors "
+                             f"alone (select={prim.select})")
+
+
+def register(name: str, func: Callable, arity: int, symbol: str | None = None, *,
+             select=None, default: bool = True) -> Primitive:
+    """Register ``func`` as primitive ``name``; a duplicate from another file is an error.
+
+    ``select``: see the module doc (conditionals); ``default``: in the default set."""
     if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
         raise ValueError(f"primitive name {name!r} must be a Python identifier")
     if not isinstance(arity, int) or not 1 <= arity <= MAX_ARITY:
@@ -114,15 +197,19 @@ def register(name: str, func: Callable, arity: int, symbol: str | None = None) -
         raise ValueError(f"duplicate primitive {name!r}: defined in {old.file} "
                          f"and in {file}")
     source, imports = _copy_source(name, func)
-    prim = Primitive(name, arity, symbol or name, func, source, imports, file)
+    prim = Primitive(name, arity, symbol or name, func, source, imports, file,
+                     _select_positions(name, select, arity), bool(default))
+    if prim.conditional:
+        _check_selector(prim)
     _REGISTRY[name] = prim
     return prim
 
 
-def primitive(name: str, arity: int, symbol: str | None = None):
+def primitive(name: str, arity: int, symbol: str | None = None, *, select=None,
+              default: bool = True):
     """Decorator form of :func:`register`; returns the function unchanged."""
     def deco(func):
-        prim = register(name, func, arity, symbol)
+        prim = register(name, func, arity, symbol, select=select, default=default)
         func.__gpmotion_primitive__ = prim
         return func
     return deco
@@ -147,6 +234,11 @@ def get(name: str) -> Primitive:
 def names() -> list[str]:
     """Registered names, sorted (a stable opcode order)."""
     return sorted(_REGISTRY)
+
+
+def default_names() -> list[str]:
+    """The default primitive set: registered names without ``default=False``."""
+    return [n for n in names() if _REGISTRY[n].default]
 
 
 def load_builtin() -> None:

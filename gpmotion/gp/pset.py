@@ -29,11 +29,13 @@ class PsetInfo:
     """A DEAP primitive set plus what bytecode and interpreter need to agree on."""
     pset: gp.PrimitiveSet
     primitive_names: tuple[str, ...]   # opcode 2 + k  <->  primitive_names[k]
-    terminal_names: tuple[str, ...]    # pset arguments, in order
-    sense_indices: tuple[int, ...]     # terminal k reads senses[sense_indices[k]]
+    terminal_names: tuple[str, ...]    # pset arguments, in order (senses, then subgoal flags)
+    sense_indices: tuple[int, ...]     # terminal k reads senses[i], i = sense_indices[k];
+    #                                    i < 0: subgoal flag -1 - i
     erc_name: str
     erc_range: tuple[float, float]
     hash: str                          # primitive names + sources + terminals
+    flag_names: tuple[str, ...] = ()   # subgoal terminals (the last len(flag_names) ones)
 
     @property
     def primitives(self) -> list[registry.Primitive]:
@@ -64,20 +66,24 @@ def pset_hash(primitive_names: Sequence[str], terminal_names: Sequence[str],
 
 def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | None = None,
                *, sense_names: Sequence[str] | None = None,
-               erc_range: tuple[float, float] = (-1.0, 1.0), name: str = "MAIN") -> PsetInfo:
-    """Primitive set over ``primitive_names`` (default: all registered) and terminals.
+               erc_range: tuple[float, float] = (-1.0, 1.0), name: str = "MAIN",
+               flag_names: Sequence[str] = ()) -> PsetInfo:
+    """Primitive set over ``primitive_names`` (default: every registered primitive
+    not declared ``default=False``) and terminals.
 
     ``sense_names`` is the full raw sense vector layout (``Figure.sense_names``);
-    when omitted, terminal k reads ``senses[k]``.
+    when omitted, terminal k reads ``senses[k]``.  ``flag_names``: subgoal
+    terminals appended after the senses (gpmotion.gp.subgoals).
     """
     registry.load_builtin()
-    prim_names = tuple(registry.names() if primitive_names is None else primitive_names)
+    prim_names = tuple(registry.default_names() if primitive_names is None else primitive_names)
     for n in prim_names:
         registry.get(n)                       # clear error for unknown names
     if len(set(prim_names)) != len(prim_names):
         raise ValueError(f"repeated primitive names in {prim_names}")
-    terms = tuple(terminal_names)
-    if not terms:
+    flags = tuple(flag_names)
+    terms = tuple(terminal_names) + flags
+    if len(terms) == len(flags):
         raise ValueError("a primitive set needs at least one terminal (sense) name")
     for t in terms:
         if not t.isidentifier() or t in prim_names or t.startswith("ERC_"):
@@ -85,14 +91,15 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
     if len(set(terms)) != len(terms):
         raise ValueError(f"repeated terminal names in {terms}")
     if sense_names is None:
-        idx = tuple(range(len(terms)))
+        idx = tuple(range(len(terms) - len(flags)))
     else:
         sense_names = list(sense_names)
-        missing = [t for t in terms if t not in sense_names]
+        missing = [t for t in terms[:len(terms) - len(flags)] if t not in sense_names]
         if missing:
             raise ValueError(f"terminals {missing} are not senses of this figure "
                              f"(senses: {', '.join(sense_names)})")
-        idx = tuple(sense_names.index(t) for t in terms)
+        idx = tuple(sense_names.index(t) for t in terms[:len(terms) - len(flags)])
+    idx += tuple(-1 - j for j in range(len(flags)))
     lo, hi = float(erc_range[0]), float(erc_range[1])
     h = pset_hash(prim_names, terms, idx, (lo, hi))
 
@@ -104,14 +111,17 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
     func = _ERC_FUNCS.setdefault(erc_name, functools.partial(random.uniform, lo, hi))
     pset.addEphemeralConstant(erc_name, func)
     pset.renameArguments(**{f"ARG{i}": t for i, t in enumerate(terms)})
-    return PsetInfo(pset, prim_names, terms, idx, erc_name, (lo, hi), h)
+    return PsetInfo(pset, prim_names, terms, idx, erc_name, (lo, hi), h, flags)
 
 
 def compile_reference(tree, info: PsetInfo) -> Callable:
-    """``deap.gp.compile`` with the interpreter's semantics: f(senses) -> float."""
+    """``deap.gp.compile`` with the interpreter's semantics: f(senses, flags=()) -> float
+    (``flags``: the subgoal flags' values; missing ones read 0.0)."""
     f = gp.compile(tree, info.pset)
     idx = info.sense_indices
 
-    def run(senses):
-        return registry.clamp(f(*(registry.clamp(senses[i]) for i in idx)))
+    def run(senses, flags=()):
+        flags = list(flags) + [0.0] * (len(info.flag_names) - len(flags))
+        return registry.clamp(f(*(registry.clamp(senses[i]) if i >= 0 else float(flags[-1 - i])
+                                  for i in idx)))
     return run

@@ -87,7 +87,8 @@ class GPSearch:
                  islands: int = 1, migrate_every: int = 5, migrants: int = 2,
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
-                 max_size: int = 200, seed: int | None = None, reuse_costs: bool = True):
+                 max_size: int = 200, seed: int | None = None, reuse_costs: bool = True,
+                 stop_on_success: bool = False):
         self.family = family
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
@@ -95,7 +96,9 @@ class GPSearch:
                              migrate_every=migrate_every, migrants=migrants,
                              selection=selection, tournament_size=tournament_size,
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
-                             max_size=max_size, seed=seed, reuse_costs=reuse_costs))
+                             max_size=max_size, seed=seed, reuse_costs=reuse_costs,
+                             stop_on_success=stop_on_success))
+        self.stopped = False                      # stop_on_success fired
         self._rstate = random.Random(self.seed).getstate()
         self.generation = 0
         self.evaluations = 0
@@ -119,6 +122,7 @@ class GPSearch:
         if not _is_int(c["generations"]) or c["generations"] < 1:
             bad("generations must be an integer >= 1", c["generations"])
         c.setdefault("p_creep", 0.0)            # checkpoints written before creep existed
+        c.setdefault("stop_on_success", False)
         c.setdefault("creep_sigma", 0.1)
         for k, v in (("islands", 1), ("migrate_every", 5), ("migrants", 2)):
             c.setdefault(k, v)
@@ -163,6 +167,7 @@ class GPSearch:
         self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
         self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
+        self.stop_on_success = bool(c["stop_on_success"])
         self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
 
     def config(self) -> dict:
@@ -174,7 +179,7 @@ class GPSearch:
                 "selection": self.selection, "tournament_size": self.tournament_size,
                 "elitism": self.elitism, "init_depth": list(self.init_depth),
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
-                "reuse_costs": self.reuse_costs}
+                "reuse_costs": self.reuse_costs, "stop_on_success": self.stop_on_success}
 
     # -- randomness ----------------------------------------------------------
     @contextlib.contextmanager
@@ -237,7 +242,7 @@ class GPSearch:
     # -- ask / tell ------------------------------------------------------------
     @property
     def done(self) -> bool:
-        return self.generation >= self.generations
+        return self.stopped or self.generation >= self.generations
 
     def _known(self) -> dict:
         same = self._parents_phase == self._cache_phase(self.generation)
@@ -275,10 +280,11 @@ class GPSearch:
         self.costs = np.array([table[k] for k in self._keys], dtype=np.float64)
         self.evaluations += len(self._pending)
         self._record(len(self._pending), evaluation)
+        self._stop_if_solved(evaluation, c)
         self._parents = {k: table[k] for k in self._keys}
         self._parents_phase = self._cache_phase(self.generation)
         self._pending = None
-        if self.generation + 1 < self.generations:       # the last population stays
+        if not self.stopped and self.generation + 1 < self.generations:   # the last population stays
             with self._own_random():
                 self._set_population(self._breed())
         self.generation += 1
@@ -304,6 +310,22 @@ class GPSearch:
             row["n_success"] = int(np.sum(evaluation.success))
             row["n_failed"] = int(np.sum(evaluation.failed))
         self.history.append(row)
+
+    def _stop_if_solved(self, evaluation, costs) -> None:
+        """``stop_on_success`` (Gritz & Hahn's termination criterion): once the
+        scene is the final one (no curriculum step left), a generation in which
+        some genome solves the task ends the run; ``best`` becomes the cheapest
+        solving genome of that generation."""
+        task = getattr(self.family, "task", None)
+        if (not self.stop_on_success or evaluation is None or task is None
+                or task.staged(self.progress) != task.staged(1.0)):
+            return
+        ok = np.flatnonzero(np.asarray(evaluation.success, dtype=bool))
+        if ok.size:
+            i = int(ok[np.argmin(costs[ok])])
+            self._best_key, self.best_cost = self._pending[i], float(costs[i])
+            self.best_generation, self._best_phase = self.generation, self.phase_of(self.generation)
+            self.stopped = True
 
     def _island_bounds(self) -> list[tuple[int, int]]:
         """[lo, hi) index range of every island in the flat population."""
@@ -374,7 +396,7 @@ class GPSearch:
         dec_key = lambda k: enc([list(t) for t in k])  # noqa: E731
         return {
             "format": STATE_FORMAT, "pset": self.family.info.hash, "config": self.config(),
-            "generation": self.generation, "evaluations": self.evaluations,
+            "generation": self.generation, "evaluations": self.evaluations, "stopped": self.stopped,
             "random": python_random_state_to_json(self._rstate),
             "population": [dec_key(k) for k in self._keys],
             "costs": None if self.costs is None else self.costs.tolist(),
@@ -405,6 +427,7 @@ class GPSearch:
             return [tokens_to_tree(list(t), info) for t in k]
         self._configure({**state["config"], "init_depth": tuple(state["config"]["init_depth"])})
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
+        self.stopped = bool(state.get("stopped", False))
         self._rstate = python_random_state_from_json(state["random"])
         self._set_population([trees(key(d)) for d in state["population"]])
         if state["costs"] is not None:

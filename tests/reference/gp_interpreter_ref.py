@@ -2,36 +2,83 @@
 
 Reads the same (ci, cf) layout (see gpmotion.gp.bytecode) and applies the
 same value rule: senses and primitive results pass through ``clamp``
-(NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.
+(NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.  Opcodes:
+0 push sense, 1 push constant, 2 jump forward, 3 push subgoal flag,
+4 + k primitive k (operand
+0: apply; operand 1: a conditional's selection: branch 0 skips the jump
+table that follows, branch j > 0 takes the table's jump j - 1).
 """
 from gpmotion.gp.primitives import clamp
 
 
-def run_tree_ref(ci, cf, tree_index, senses, funcs, stack_cap=64):
-    """funcs[k] is the Python function of opcode 2 + k."""
-    h = 2 + 3 * tree_index
+def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, flags=()):
+    """funcs[k] is the Python function of opcode 4 + k; selects[k] its selector
+    positions (empty: not a conditional); flags: the subgoal flags' values."""
+    selects = selects or [()] * len(funcs)
+    h = 3 + 3 * tree_index
     pos, n_ops = int(ci[h + 1]), int(ci[h + 2])
+    end = pos + 2 * n_ops
     stack = []
-    for _ in range(n_ops):
+    while pos < end:
         op, arg = int(ci[pos]), int(ci[pos + 1])
         pos += 2
         if op in (0, 1):
             if len(stack) >= stack_cap:
                 return 0.0
             stack.append(clamp(senses[arg]) if op == 0 else float(cf[arg]))
-        elif 2 <= op < 2 + len(funcs):
-            f = funcs[op - 2]
+        elif op == 3:
+            if len(stack) >= stack_cap or not 0 <= arg < len(flags):
+                return 0.0
+            stack.append(float(flags[arg]))
+        elif op == 2:
+            if arg < 0 or pos + 2 * arg > end:
+                return 0.0
+            pos += 2 * arg
+        elif 4 <= op < 4 + len(funcs) and arg == 0:
+            f = funcs[op - 4]
             n = f.__code__.co_argcount
             if len(stack) < n:
                 return 0.0
             args = stack[len(stack) - n:]
             del stack[len(stack) - n:]
             stack.append(clamp(f(*args)))
+        elif 4 <= op < 4 + len(funcs) and arg == 1 and selects[op - 4]:
+            f, sel = funcs[op - 4], selects[op - 4]
+            n = f.__code__.co_argcount
+            if len(stack) < len(sel):
+                return 0.0
+            picked = stack[len(stack) - len(sel):]
+            del stack[len(stack) - len(sel):]
+            branches = [i for i in range(n) if i not in sel]
+            args = [0.0] * n
+            for i, v in zip(sel, picked):
+                args[i] = v
+            for k, i in enumerate(branches):
+                args[i] = float(k)
+            j = f(*args)
+            if j not in range(len(branches)):
+                return 0.0
+            skip = len(branches) - 1 if j == 0 else int(j) - 1   # past the table / onto J_j
+            if pos + 2 * skip >= end:
+                return 0.0
+            pos += 2 * skip
         else:
             return 0.0
     return stack[0] if len(stack) == 1 else 0.0
 
 
-def control_ref(ci, cf, senses, targets, funcs):
+def update_flags_ref(ci, cf, senses, flags):
+    """Latch subgoal flag j once its test holds: 0 sense > thr, 1 <, 2 |sense| <."""
+    b = 3 + 3 * int(ci[0])
+    for j in range(int(ci[2])):
+        v, code, thr = senses[int(ci[b + 3 * j])], int(ci[b + 3 * j + 1]), cf[int(ci[b + 3 * j + 2])]
+        if (v > thr, v < thr, abs(v) < thr)[code]:
+            flags[j] = 1.0
+
+
+def control_ref(ci, cf, senses, targets, funcs, selects=None, flags=None):
+    """One control step; ``flags`` (a list, kept by the caller across steps)."""
+    flags = [0.0] * int(ci[2]) if flags is None else flags
+    update_flags_ref(ci, cf, senses, flags)
     for k in range(int(ci[0])):
-        targets[int(ci[2 + 3 * k])] = run_tree_ref(ci, cf, k, senses, funcs)
+        targets[int(ci[3 + 3 * k])] = run_tree_ref(ci, cf, k, senses, funcs, selects, flags=flags)
