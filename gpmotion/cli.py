@@ -103,6 +103,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=0)
     p.add_argument("--scheduler")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    p.add_argument("--force", action="store_true", help="overwrite a non-empty --out folder")
     p.add_argument("--quiet", action="store_true")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
@@ -318,7 +319,8 @@ def cmd_compare(args):
     out = args.out or f"runs/compare-{args.task}"
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
                        params=_params(args.param), population=args.population,
-                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
+                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
+                       force=args.force)
     print(md)
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
 
