@@ -18,7 +18,9 @@ the paper's rod count = n_act + 1 in ours.  Variable durations would add R−1
 parameters and a boundary search here.
 
 Program layout (see ``encode_batch``)
-  ci = [R, n_act]
+  ci = [R, n_act, actuator_0 .. actuator_{n_act-1}]   (figure actuator of θ₀
+        column i; the figure's other actuators keep the rollout's neutral
+        target and τ)
   cf = [t_per, then R blocks of [τ, θ₀_0 .. θ₀_{n_act-1}]]
   cstate = [active rule]                      (CSTATE_SIZE = 1)
 """
@@ -57,5 +59,6 @@ def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     base = 1 + r * (n_act + 1)
     tau = cf[base]
     for i in range(n_act):
-        targets[i] = cf[base + 1 + i]
-        taus[i] = tau
+        a = ci[2 + i]
+        targets[a] = cf[base + 1 + i]
+        taus[a] = tau
