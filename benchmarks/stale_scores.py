@@ -26,18 +26,17 @@ from gpmotion.task import get_task
 def measure(task_name="lamp_hop", family="bsr-time", budget=3000, seed=0, actuation="pd"):
     task = get_task(task_name)
     fam = make_family(family, task)
-    search = make_search(fam, seed, **_search_opts(family, budget, 100))
+    search = make_search(fam, seed, **_search_opts(family, budget, 100, task))
     ev = InProcessEvaluator(task, fam, actuation)
-    accepted = {"before_0.1": 0, "after_0.5": 0}
+    accepted = {"progress < 0.1": 0, "0.1..0.5": 0, "progress > 0.5": 0}
     while not search.done:
         genomes = search.ask()
-        before = None if search.search.scores is None else search.search.scores.copy()
+        mutants = search.search.working is not None and not getattr(search.search, "rescoring", False)
         p = search.progress
         search.tell(ev.evaluate(genomes, p))
-        if before is not None and len(before) == len(search.search.scores):
-            n = int(np.sum(search.search.scores != before))
-            accepted["before_0.1" if p < 0.1 else "after_0.5" if p > 0.5 else "middle"] = \
-                accepted.get("before_0.1" if p < 0.1 else "after_0.5" if p > 0.5 else "middle", 0) + n
+        if mutants:                  # an accepted mutant is the very object handed out
+            key = "progress < 0.1" if p < 0.1 else "progress > 0.5" if p > 0.5 else "0.1..0.5"
+            accepted[key] += sum(w is g for w, g in zip(search.search.working, genomes))
     s = search.search
     full = ev.evaluate(list(s.working) + [s.best_genome], 1.0).costs
     return {"stored": np.asarray(s.scores, float), "full": full[:-1],
