@@ -180,7 +180,12 @@ def plot_curves(path, series, task, window, window_evals, actuation):
         (line,) = ax.plot(x, q50, lw=1.6, drawstyle="steps-post", label=str(name))
         ax.fill_between(x, q25, q75, color=line.get_color(), alpha=0.25, lw=0, step="post")
     ax.set_xlabel("evaluations")
-    ax.set_ylabel("best cost so far, final weights\n(lower is better)")
+    ys = np.concatenate([np.asarray(v[1:], float).ravel() for v in series.values()])
+    ys = ys[np.isfinite(ys)]
+    log = ys.size and ys.min() > 0 and ys.max() > 20 * ys.min()   # families far apart
+    if log:
+        ax.set_yscale("log")
+    ax.set_ylabel("best cost so far, final weights\n(lower is better" + (", log scale)" if log else ")"))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(f"{task.name}: GP vs BSR ({actuation})")
@@ -247,8 +252,23 @@ def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", param
     atomic_write_text(out / "compare.md", md)
     atomic_write_json(out / "runs.json", {"task": task.name, "params": task.p, "actuation": actuation,
                                           "budget": budget, "runs": runs})
-    series = _bands(runs, budget)
-    atomic_write_text(out / "curves.csv", _curves_csv(series))
-    window = phase_window(task)
-    plot_curves(out / "curves.png", series, task, window, _window_evals(runs, window), actuation)
+    write_curves(out, task, runs, budget, actuation)
     return rows, md
+
+
+def write_curves(out, task, runs, budget, actuation):
+    """curves.csv and curves.png of ``runs`` (as in runs.json)."""
+    series = _bands(runs, budget)
+    atomic_write_text(Path(out) / "curves.csv", _curves_csv(series))
+    window = phase_window(task)
+    plot_curves(Path(out) / "curves.png", series, task, window, _window_evals(runs, window),
+                actuation)
+
+
+def replot(out) -> Path:
+    """Redraw a compare folder's curves from its runs.json (no search is run)."""
+    import json
+    d = json.loads((Path(out) / "runs.json").read_text())
+    task = get_task(d["task"], **d["params"])
+    write_curves(out, task, d["runs"], int(d["budget"]), d["actuation"])
+    return Path(out) / "curves.png"

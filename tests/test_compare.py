@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from gpmotion.compare import compare, phase_window
+from gpmotion.compare import compare, phase_window, replot
 from gpmotion.evaluate import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.replay import load_controller, replay_genome
@@ -107,6 +107,9 @@ def _check_compare(tmp_path, budget):
             _, costs, _, _ = replay_genome(task, family, act, genome)
             assert costs[0] == rec["cost"] == r["final_cost"]
     assert (out / "curves.png").stat().st_size > 1000
+    plotted = (out / "curves.csv").read_text()
+    replot(out)                                   # the same curves from runs.json alone
+    assert (out / "curves.csv").read_text() == plotted
     with pytest.raises(ValueError, match="--force"):
         compare("lamp_hop", ["gp"], 1, budget, out, params=SHORT, quiet=True)
     compare("lamp_hop", ["gp"], 1, 30, out, params=SHORT, population=10, quiet=True, force=True)
