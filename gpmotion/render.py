@@ -7,6 +7,11 @@ Segments are ``float[F, n_seg, 2, 2]`` — frame, segment, endpoint (a, b),
 so limbs have their true thickness at any zoom (a line width in points would
 not).
 
+GIFs play in real time unless asked otherwise, and say their speed;
+filmstrips keep the motion's events (take-off, apex, landing, ...) besides
+evenly spaced frames (:mod:`gpmotion.frames`).  :func:`run_curve` draws a
+run's curve.png with its phase-in windows.
+
 Uses matplotlib's object API with an Agg canvas — no pyplot, no global
 backend switch, no screen.  Every output goes to a temp file beside the
 target and is moved into place only when complete
@@ -28,6 +33,7 @@ from matplotlib.gridspec import GridSpec
 from matplotlib.patches import Circle
 from PIL import Image
 
+from gpmotion.frames import choose_frames, event_labels, gif_timing, speed_text
 from gpmotion.records import atomic_output
 
 _ARC = 9  # points per half-circle of a capsule (odd: the tip is a vertex)
@@ -69,15 +75,6 @@ def _check_motion(segments, radii, times, dims: int = 2):
     return seg, rad, t, ok
 
 
-def _pick(ok: np.ndarray, n: int) -> np.ndarray:
-    """At most ``n`` evenly spaced entries of ``ok``, first and last included."""
-    if n < 1:
-        raise ValueError(f"need at least one frame to draw, got {n}")
-    if ok.size <= n:
-        return ok
-    return ok[np.unique(np.linspace(0, ok.size - 1, n).round().astype(int))]
-
-
 def _scene_limits(seg, rad, frames, poles, ground_z, goal, pad=0.1):
     pts = seg[frames].reshape(-1, 2)
     r = rad.max()
@@ -105,16 +102,36 @@ def _check_scene(poles, goal):
     return poles, goal
 
 
-def _draw_scene(ax, lo, hi, poles, ground_z, goal, small=False):
+def pole_text(x_z_r, ground_z) -> str:
+    """A limbo pole's label: the height of its underside (what the figure
+    must pass below), above the ground when there is one."""
+    _, z, r = x_z_r
+    if ground_z is None:
+        return f"pole: underside z = {z - r:.2f} m"
+    return f"pole: underside {z - r - ground_z:.2f} m up"
+
+
+def _draw_scene(ax, lo, hi, poles, ground_z, goal, small=False, goal_label=None):
     if ground_z is not None:
         ax.axhspan(lo[1] - 10 * (hi[1] - lo[1]), ground_z, color="0.9", zorder=0)
         ax.axhline(ground_z, color="0.35", lw=0.8 if small else 1.2, zorder=1)
     if poles is not None:
         for x, z, r in poles:
-            ax.add_patch(Circle((x, z), r, color="tab:red", alpha=0.8, zorder=2))
+            # the bar runs along y (into the page): its end-on section, and
+            # the post it rests on (at its end, behind the figure: dashed)
+            base = ground_z if ground_z is not None else lo[1]
+            ax.plot([x, x], [base, z], color="0.6", lw=0.8 if small else 1.5, ls=(0, (4, 3)),
+                    zorder=1.5)
+            ax.add_patch(Circle((x, z), r, color="tab:red", alpha=0.9, zorder=2))
+            if not small:
+                ax.annotate(pole_text((x, z, r), ground_z), (x + r, z), xytext=(6, 4),
+                            textcoords="offset points", fontsize=8, color="tab:red", zorder=6)
     if goal is not None:
         ax.plot([goal[0]], [goal[1]], marker="*", ms=7 if small else 14,
                 color="gold", mec="k", mew=0.6, zorder=5, ls="none")
+        if goal_label and not small:
+            ax.annotate(goal_label, (goal[0], goal[1]), xytext=(0, -9), textcoords="offset points",
+                        ha="center", va="top", fontsize=8, zorder=6)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal", adjustable="box")
@@ -136,25 +153,41 @@ def _save_png(fig: Figure, path, dpi: int) -> None:
 
 # -------------------------------------------------------------- filmstrip
 
-def filmstrip(path, segments, radii, times, *, poles=None, ground_z=0.0,
-              goal=None, n_frames: int = 10, title: str | None = None,
-              labels: Sequence[str | None] | None = None, strip: bool = True,
-              dpi: int = 120) -> None:
-    """The papers' strobe picture, saved as PNG.
+def _captions(n: int, labels, events) -> list[str]:
+    """Per recorded frame: the event word(s) and the caller's label."""
+    words = event_labels(n, list(events or []))
+    for i, lab in enumerate(labels or []):
+        if lab:
+            words[i] = f"{words[i]}, {lab}" if words[i] else str(lab)
+    return words
 
-    Top: the figure at ``n_frames`` evenly spaced finite frames overlaid on one
-    axis, later frames darker, with ground, limbo poles (``float[n, 3]`` =
-    x, z, radius) and the goal (x, z).  Bottom (``strip=True``): the same
-    frames as small multiples at one common scale, each centred on the
-    figure and captioned with its time; ``labels`` (one per *recorded*
-    frame, entries may be None/"") add a word such as "apex" to a caption.
+
+def filmstrip(path, segments, radii, times, *, poles=None, ground_z=0.0,
+              goal=None, goal_label: str | None = None, n_frames: int = 10,
+              title: str | None = None, labels: Sequence[str | None] | None = None,
+              events: Sequence[tuple[int, str]] | None = None, strip: bool = True,
+              dpi: int = 120) -> np.ndarray:
+    """The papers' strobe picture, saved as PNG; returns the indices of the
+    recorded frames drawn.
+
+    Top: the figure at ``n_frames`` finite frames overlaid on one axis,
+    later frames darker, with ground, limbo poles (``float[n, 3]`` = x, z,
+    radius; drawn as the bar's section on its post, labelled with its
+    height) and the goal (x, z; a star, captioned ``goal_label``).  The
+    frames are the first, the last, the ``events`` (``[(frame, word)]``,
+    e.g. :func:`gpmotion.frames.flight_events`' take-off/apex/landing) and
+    evenly spaced fill-ins.  Bottom (``strip=True``): the same frames as
+    small multiples at one common scale, each centred on the figure and
+    captioned with its time and its event; ``labels`` (one per *recorded*
+    frame, entries may be None/"") add further words to a caption.
     """
     seg, rad, t, ok = _check_motion(segments, radii, times)
     poles, goal = _check_scene(poles, goal)
     if labels is not None and len(labels) != seg.shape[0]:
         raise ValueError(f"labels must have one entry per frame ({seg.shape[0]}), "
                          f"got {len(labels)}")
-    frames = _pick(ok, n_frames)
+    frames = choose_frames(ok, t, n_frames, list(events or []))
+    words = _captions(seg.shape[0], labels, events)
     lo, hi = _scene_limits(seg, rad, frames, poles, ground_z, goal)
     span = hi - lo
     n = len(frames)
@@ -175,7 +208,7 @@ def filmstrip(path, segments, radii, times, *, poles=None, ground_z=0.0,
     ax = fig.add_subplot(gs[0, :])
     cmap = colormaps["Blues"]
     colors = [cmap(v) for v in np.linspace(0.35, 1.0, n)]
-    _draw_scene(ax, lo, hi, poles, ground_z, goal)
+    _draw_scene(ax, lo, hi, poles, ground_z, goal, goal_label=goal_label)
     for k, (i, c) in enumerate(zip(frames, colors)):
         _figure_body(ax, seg[i], rad, c, zorder=3 + k / n, alpha=0.85)
     ax.set_xlabel("x (m)")
@@ -188,40 +221,41 @@ def filmstrip(path, segments, radii, times, *, poles=None, ground_z=0.0,
             _draw_scene(sub, (x_mid[k] - half_x, lo[1]), (x_mid[k] + half_x, hi[1]),
                         poles, ground_z, goal, small=True)
             _figure_body(sub, seg[i], rad, c)
-            caption = f"t={t[i]:.2f}s"
-            if labels is not None and labels[i]:
-                caption += f"\n{labels[i]}"
+            caption = f"t={t[i]:.2f}s" + (f"\n{words[i]}" if words[i] else "")
             sub.set_title(caption, fontsize=7)
             sub.set_xticks([])
             sub.set_yticks([])
     fig.set_layout_engine("constrained")
     _save_png(fig, path, dpi)
+    return frames
 
 
 # ---------------------------------------------------------------- animate
 
 def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
-            goal=None, fps: int = 25, max_frames: int = 200,
-            title: str | None = None, dpi: int = 80) -> int:
+            goal=None, goal_label: str | None = None, speed: float = 1.0,
+            fps: float = 25, max_frames: int = 200, title: str | None = None,
+            dpi: int = 80) -> int:
     """An animated GIF of the motion; returns the number of frames written.
 
-    Frames are subsampled evenly to at most ``max_frames``; axis limits come
-    from the whole motion so the camera stays still; the recorded time is
-    shown in a corner.  Frames are quantized to a palette as they are drawn,
-    so memory stays small even at ``max_frames``.
+    It plays at ``speed`` × real time (default 1: real time; the speed is
+    written in a corner beside the recorded time): the frames are every k-th
+    recorded one with k chosen so that at most ``fps`` frames play per second
+    and at most ``max_frames`` are written, and each lasts its share of
+    simulated time (:func:`gpmotion.frames.gif_timing`).  Axis limits come
+    from the whole motion so the camera stays still.  Frames are quantized to
+    a palette as they are drawn, so memory stays small.
     """
     seg, rad, t, ok = _check_motion(segments, radii, times)
     poles, goal = _check_scene(poles, goal)
-    if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
-        raise ValueError(f"fps must be in (0, 100], got {fps!r}")
-    frames = _pick(ok, int(max_frames))
+    frames, durations = gif_timing(ok, t, speed, fps, int(max_frames))
     lo, hi = _scene_limits(seg, rad, ok, poles, ground_z, goal)
     span = hi - lo
     width = 6.0
     fig = Figure(figsize=(width, float(np.clip(width * span[1] / span[0], 2.0, 6.0))))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
-    _draw_scene(ax, lo, hi, poles, ground_z, goal)
+    _draw_scene(ax, lo, hi, poles, ground_z, goal, goal_label=goal_label)
     if title:
         ax.set_title(title)
     ax.set_xticks([])
@@ -233,15 +267,20 @@ def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
     images = []
     for i in frames:
         body.set_verts(capsules(seg[i], rad))
-        clock.set_text(f"t = {t[i]:6.2f} s")
+        clock.set_text(f"t = {t[i]:5.2f} s\n{speed_text(speed)}")
         fig.canvas.draw()
         rgba = np.asarray(fig.canvas.buffer_rgba())
         images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
             256, method=Image.Quantize.MEDIANCUT))
+    save_gif(path, images, durations)
+    return len(images)
+
+
+def save_gif(path, images, durations) -> None:
+    """Write palette frames with per-frame durations (ms), looping."""
     with atomic_output(path) as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                       duration=max(int(round(1000 / fps)), 20), loop=0)
-    return len(images)
+                       duration=list(durations) if len(images) > 1 else durations[0], loop=0)
 
 
 # ----------------------------------------------------------------- curves
@@ -310,3 +349,116 @@ def curves_band(path, series: Mapping[str, tuple], xlabel: str = "generation",
         ax.set_title(title)
     fig.set_layout_engine("constrained")
     _save_png(fig, path, dpi)
+
+
+# ------------------------------------------------------- a run's curve.png
+
+def _column(rows, key) -> np.ndarray | None:
+    """A log column as floats (blank or unparsable cells NaN); None when the
+    log has no such column or it is blank throughout."""
+    if not rows or key not in rows[0]:
+        return None
+    out = np.full(len(rows), np.nan)
+    for i, r in enumerate(rows):
+        try:
+            out[i] = float(r.get(key) or "nan")
+        except ValueError:
+            pass
+    return out if np.isfinite(out).any() else None
+
+
+def phase_windows(task) -> list[tuple[float, float, str]]:
+    """The (a, b) progress windows over which a task's weights change, with
+    what changes: style terms ramping in (grouped by window) and curriculum
+    parameters easing to their values."""
+    groups: dict[tuple[float, float], list[str]] = {}
+    for term in getattr(task, "terms", ()):
+        a, b = (float(v) for v in term.phase)
+        if b > a and term.weight != 0:
+            groups.setdefault((a, b), []).append(term.name)
+    for name, ease in getattr(task, "curriculum", {}).items():
+        a, b = (float(v) for v in ease.phase)
+        if b > a:
+            groups.setdefault((a, b), []).append(f"{name} (curriculum)")
+    return [(a, b, ", ".join(names)) for (a, b), names in sorted(groups.items())]
+
+
+def run_curve(path, rows: Sequence[Mapping[str, str]], task, title: str | None = None,
+              dpi: int = 120) -> None:
+    """A run's learning curve from its log rows (log.csv as dicts of strings).
+
+    Plots the best so far and the generation median, both under the weights
+    in force at each generation ("current weights": they grow as style terms
+    phase in, so these curves may rise), and, when the log has the column
+    ``best_final``, the best so far re-scored under the final weights (which
+    never rises).  Below, a strip shows each phase-in window (the terms
+    ramping from weight 0 to full), also shaded on the curve.  x is
+    evaluations (generations when the log lacks them).
+    """
+    if not rows:
+        raise ValueError("run_curve: the log has no rows")
+    x = _column(rows, "evaluations")
+    xlabel = "evaluations"
+    if x is None:
+        x, xlabel = _column(rows, "generation"), "generation"
+    best = _column(rows, "best_so_far")
+    if x is None or best is None:
+        raise ValueError("run_curve: the log needs 'best_so_far' and 'evaluations' or 'generation'")
+    median, final = _column(rows, "gen_median"), _column(rows, "best_final")
+    progress = _column(rows, "progress")
+    windows = phase_windows(task) if progress is not None else []
+
+    fig = Figure(figsize=(7, 4.8 if windows else 4.2))
+    gs = GridSpec(2 if windows else 1, 1, figure=fig,
+                  height_ratios=[4, 0.35 + 0.28 * len(windows)] if windows else None)
+    ax = fig.add_subplot(gs[0])
+    ax.plot(x, best, lw=1.8, color="tab:blue", label="best so far, current weights")
+    if median is not None:
+        ax.plot(x, median, lw=1.0, ls="--", color="tab:blue", alpha=0.6,
+                label="generation median, current weights")
+    if final is not None:
+        ax.plot(x, final, lw=1.8, color="tab:green", label="best so far, final weights")
+    _cost_limits(ax, best, final, median)
+    ax.set_ylabel("cost (lower is better)" if final is not None
+                  else "cost (lower is better),\ncurrent weights")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title)
+    if windows:
+        xs = [(float(np.interp(a, progress, x)), float(np.interp(b, progress, x)), names)
+              for a, b, names in windows]
+        for x0, x1, _ in xs:
+            ax.axvspan(x0, x1, color="tab:orange", alpha=0.08, lw=0)
+        ax.tick_params(labelbottom=False)
+        ax.legend(fontsize=8, loc="upper right")
+        _phase_strip(fig.add_subplot(gs[1], sharex=ax), xs, xlabel)
+    else:
+        ax.set_xlabel(xlabel)
+        ax.legend(fontsize=8)
+    fig.set_layout_engine("constrained")
+    _save_png(fig, path, dpi)
+
+
+def _cost_limits(ax, best, final, median):
+    """y limits that show the best curves whole and the median up to its
+    own middle value: it can spike by orders of magnitude while terms
+    phase in, and would flatten the best curves (the spikes leave the top)."""
+    keep = np.concatenate([v[np.isfinite(v)] for v in (best, final) if v is not None])
+    lo, hi = keep.min(), keep.max()
+    if median is not None and np.isfinite(median).any():
+        lo, hi = min(lo, np.nanmin(median)), max(hi, np.nanmedian(median))
+    pad = 0.05 * max(hi - lo, abs(hi) * 0.1, 1e-9)
+    ax.set_ylim(lo - pad, hi + pad)
+
+
+def _phase_strip(ax, xs, xlabel):
+    """One bar per phase-in window, captioned with the terms that ramp in it."""
+    for k, (x0, x1, names) in enumerate(xs):
+        y = len(xs) - 1 - k
+        ax.barh(y, x1 - x0, left=x0, height=0.7, color="tab:orange", alpha=0.45, lw=0)
+        ax.text(x0, y, f" {names}", va="center", ha="left", fontsize=7)
+    ax.set_ylim(-0.6, len(xs) - 0.4)
+    ax.set_yticks([])
+    ax.set_ylabel("ramping\nin", fontsize=7, rotation=0, ha="right", va="center")
+    ax.set_xlabel(xlabel)
+    ax.grid(alpha=0.3, axis="x")

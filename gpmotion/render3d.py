@@ -13,9 +13,12 @@ frame of a picture uses the same axis limits, taken from the whole motion,
 at equal scale on x, y and z (``set_box_aspect``).  The ground is a grid of
 lines every 0.25 m on z = ``ground_z`` (wider spacing on very large scenes,
 at most ~40 lines a side).  Limbo poles (x, z, radius) are horizontal bars
-along y, the goal is a gold star, ``targets`` (points, e.g. the object to
-touch) red dots.  Object API with an Agg canvas (no pyplot, no screen);
-outputs are written atomically (:func:`gpmotion.records.atomic_output`).
+along y on two posts, labelled with the height of their underside; the goal
+is a gold star (``goal_label`` captions it; :func:`render_any` draws it only
+for a task that names it); ``targets`` (points, e.g. the object to touch) are
+red dots.  Frames and GIF timing as in :mod:`gpmotion.render`
+(:mod:`gpmotion.frames`).  Object API with an Agg canvas (no pyplot, no
+screen); outputs are written atomically (:func:`gpmotion.records.atomic_output`).
 Frames containing NaN/inf are skipped; no usable frame is a ValueError.
 """
 from __future__ import annotations
@@ -25,6 +28,7 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.gridspec import GridSpec
+from matplotlib.ticker import MaxNLocator, NullFormatter
 from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 from PIL import Image
@@ -32,7 +36,9 @@ from PIL import Image
 from gpmotion.records import atomic_output
 
 GRID = 0.25          # ground grid spacing (m)
-from .render import _check_motion  # noqa: E402  (one validator for both renderers)
+from .frames import (choose_frames, crossing_events, event_labels, flight_events,  # noqa: E402
+                     gif_timing, speed_text)
+from .render import _check_motion, pole_text, save_gif  # noqa: E402  (shared with the planar renderer)
 
 _MAX_GRID_LINES = 40
 
@@ -62,15 +68,6 @@ def _check_scene3d(goal, targets, poles):
         if not len(poles):
             poles = None
     return goal, targets, poles
-
-
-def _pick(ok: np.ndarray, n: int) -> np.ndarray:
-    """At most ``n`` evenly spaced entries of ``ok``, first and last included."""
-    if n < 1:
-        raise ValueError(f"need at least one frame to draw, got {n}")
-    if ok.size <= n:
-        return ok
-    return ok[np.unique(np.linspace(0, ok.size - 1, n).round().astype(int))]
 
 
 def _limits(points, rad, ground_z, goal, targets, poles, pad=0.06):
@@ -112,15 +109,15 @@ def _setup(ax, lo, hi, elev, azim, small=False):
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(tuple(hi - lo), zoom=1.3 if small else 1.0)
+    ax.set_box_aspect(tuple(hi - lo), zoom=1.3 if small else 0.85)   # room for tick labels
     ax.view_init(elev=elev, azim=azim)
     ax.computed_zorder = False          # draw order: ground, then older → newer frames
     if small:
         ax.set_axis_off()
     else:
         for lab, setter in (("x (m)", ax.set_xlabel), ("y (m)", ax.set_ylabel), ("z (m)", ax.set_zlabel)):
-            setter(lab, fontsize=8, labelpad=-2)
-        ax.tick_params(labelsize=7, pad=0)
+            setter(lab, fontsize=8, labelpad=12)
+        ax.tick_params(labelsize=7, pad=4)
         for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
             axis.pane.set_alpha(0.15)
 
@@ -143,17 +140,30 @@ def _ground(ax, lo, hi, ground_z, small=False):
         ax.add_collection3d(Line3DCollection(lines, colors="0.55", linewidths=0.3 if small else 0.5))
 
 
-def _markers(ax, lo, hi, goal, targets, poles, ppm, small=False):
+def _markers(ax, lo, hi, goal, targets, poles, ppm, small=False, ground_z=None,
+             goal_label=None):
     if poles is not None:
-        bars = [[(x, lo[1], z), (x, hi[1], z)] for x, z, _ in poles]
-        ax.add_collection3d(Line3DCollection(bars, colors="tab:red", alpha=0.8,
+        # a bar along y resting on a post at each end, labelled with its height
+        base = ground_z if ground_z is not None else lo[2]
+        y0, y1 = lo[1] + 0.1 * (hi[1] - lo[1]), hi[1] - 0.1 * (hi[1] - lo[1])
+        bars = [[(x, y0, z), (x, y1, z)] for x, z, _ in poles]
+        posts = [[(x, y, base), (x, y, z)] for x, z, _ in poles for y in (y0, y1)]
+        ax.add_collection3d(Line3DCollection(posts, colors="0.5", linewidths=1.0 if small else 2.0))
+        ax.add_collection3d(Line3DCollection(bars, colors="tab:red", alpha=0.9,
                                              linewidths=np.clip(2 * poles[:, 2] * ppm, 1, 40)))
+        if not small:
+            for x, z, r in poles:
+                ax.text(x, y1, z + r, " " + pole_text((x, z, r), ground_z), fontsize=8,
+                        color="tab:red", va="bottom")
     if targets is not None:
         ax.plot(targets[:, 0], targets[:, 1], targets[:, 2], ls="none", marker="o",
                 ms=4 if small else 8, color="tab:red", mec="k", mew=0.6)
     if goal is not None:
         ax.plot([goal[0]], [goal[1]], [goal[2]], ls="none", marker="*",
-                ms=7 if small else 14, color="gold", mec="k", mew=0.6)
+                ms=7 if small else 14, color="gold", mec="k", mew=0.6, zorder=9)
+        if goal_label and not small:           # above the figure, on a pale ground
+            ax.text(goal[0], goal[1], goal[2], "   " + goal_label, fontsize=8, va="center",
+                    zorder=10, bbox=dict(fc="white", ec="none", alpha=0.7, pad=1))
 
 
 def _points_per_metre(ax, lo, hi) -> float:
@@ -171,6 +181,26 @@ def _points_per_metre(ax, lo, hi) -> float:
     c0 = disp(c)
     px = max(np.hypot(*(disp(c + d * e) - c0)) for e in np.eye(3)) / d
     return float(px * 72.0 / fig.dpi)
+
+
+def _fit_ticks(ax, lo, hi, spacing: float = 45.0) -> None:
+    """Tick labels that do not overlap (call once the axes are laid out):
+    about one tick per ``spacing`` points of each axis's projected length;
+    an axis seen nearly end-on keeps two grid lines and no numbers."""
+    M = ax.get_proj()
+
+    def disp(p):
+        x, y, _ = proj3d.proj_transform(p[0], p[1], p[2], M)
+        return ax.transData.transform((x, y))
+
+    for i, axis in enumerate((ax.xaxis, ax.yaxis, ax.zaxis)):
+        end = np.array(lo, float)
+        end[i] = hi[i]
+        points = np.hypot(*(disp(end) - disp(lo))) * 72.0 / ax.figure.dpi
+        n = int(points // spacing)
+        axis.set_major_locator(MaxNLocator(nbins=max(n, 2)))
+        if n < 2:
+            axis.set_major_formatter(NullFormatter())
 
 
 def _body_style(rad, ppm):
@@ -201,21 +231,27 @@ def _save_png(fig: Figure, path, dpi: int) -> None:
 
 # -------------------------------------------------------------- filmstrip
 
-def filmstrip3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=None,
-                poles=None, n_frames: int = 8, title: str | None = None, elev: float = 15,
-                azim: float = -60, strip: bool = True, dpi: int = 110) -> None:
-    """Strobe picture of a 3-D motion, saved as PNG.
+def filmstrip3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_label=None,
+                targets=None, poles=None, n_frames: int = 8, events=None,
+                title: str | None = None, elev: float = 15, azim: float = -60,
+                strip: bool = True, dpi: int = 110) -> np.ndarray:
+    """Strobe picture of a 3-D motion, saved as PNG; returns the indices of
+    the recorded frames drawn.
 
-    Top: the figure at ``n_frames`` evenly spaced finite frames overlaid in
-    one view, later frames darker, over the ground grid, with the goal
-    (x, y, z; a planar (x, z) is lifted to y = 0), target points ``[n, 3]``
-    and poles ``[n, 3]`` (x, z, radius).  Bottom (``strip=True``): the same
-    frames as small multiples at one common scale and camera, each centred
-    on the figure (x, y) and captioned with its time.
+    Top: the figure at ``n_frames`` finite frames — the first, the last, the
+    ``events`` (``[(frame, word)]``, e.g. take-off/apex/landing) and evenly
+    spaced fill-ins — overlaid in one view, later frames darker, over the
+    ground grid, with the goal (x, y, z; a planar (x, z) is lifted to y = 0;
+    captioned ``goal_label``), target points ``[n, 3]`` and poles ``[n, 3]``
+    (x, z, radius; bars along y on posts, labelled with their height).
+    Bottom (``strip=True``): the same frames as small multiples at one
+    common scale and camera, each centred on the figure (x, y) and captioned
+    with its time and event.
     """
     seg, rad, t, ok = _check_motion3d(segments, radii, times)
     goal, targets, poles = _check_scene3d(goal, targets, poles)
-    frames = _pick(ok, n_frames)
+    frames = choose_frames(ok, t, n_frames, list(events or []))
+    words = event_labels(seg.shape[0], list(events or []))
     lo, hi = _limits(seg[frames], rad, ground_z, goal, targets, poles)
     n = len(frames)
     width = float(np.clip(1.7 * n, 8.0, 16.0))
@@ -247,36 +283,40 @@ def filmstrip3d(path, segments, radii, times, *, ground_z=0.0, goal=None, target
     cmap = colormaps["Blues"]
     colors = [cmap(v) for v in np.linspace(0.35, 1.0, n)]
     ppm = _points_per_metre(ax, lo, hi)
+    _fit_ticks(ax, lo, hi)
     _ground(ax, lo, hi, ground_z)
-    _markers(ax, lo, hi, goal, targets, poles, ppm)
+    _markers(ax, lo, hi, goal, targets, poles, ppm, ground_z=ground_z, goal_label=goal_label)
     for i, c in zip(frames, colors):
         _draw_figure(ax, seg[i], rad, c, ppm, alpha=0.9)
     for (sub, slo, shi), i, c in zip(subs, frames, colors):
         sppm = _points_per_metre(sub, slo, shi)
         _ground(sub, slo, shi, ground_z, small=True)
-        _markers(sub, slo, shi, goal, targets, poles, sppm, small=True)
+        _markers(sub, slo, shi, goal, targets, poles, sppm, small=True, ground_z=ground_z)
         _draw_figure(sub, seg[i], rad, c, sppm)
-        sub.text2D(0.5, 0.97, f"t={t[i]:.2f}s", transform=sub.transAxes, ha="center",
+        caption = f"t={t[i]:.2f}s" + (f"\n{words[i]}" if words[i] else "")
+        sub.text2D(0.5, 0.97, caption, transform=sub.transAxes, ha="center",
                    va="top", fontsize=7)
     _save_png(fig, path, dpi)
+    return frames
 
 
 # ---------------------------------------------------------------- animate
 
-def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=None,
-              poles=None, fps: int = 25, max_frames: int = 150, title: str | None = None,
-              elev: float = 15, azim: float = -60, dpi: int = 80) -> int:
+def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_label=None,
+              targets=None, poles=None, speed: float = 1.0, fps: float = 25,
+              max_frames: int = 150, title: str | None = None, elev: float = 15,
+              azim: float = -60, dpi: int = 80) -> int:
     """An animated GIF of a 3-D motion; returns the number of frames written.
 
-    Frames are subsampled evenly to at most ``max_frames``; the camera and
-    axis limits come from the whole motion so they stay still; the recorded
-    time is shown in a corner.  Frames are palette-quantized as drawn.
+    Plays at ``speed`` × real time (default 1; written in a corner beside the
+    recorded time) with at most ``fps`` frames per second and ``max_frames``
+    frames (:func:`gpmotion.frames.gif_timing`); the camera and axis limits
+    come from the whole motion so they stay still.  Frames are
+    palette-quantized as drawn.
     """
     seg, rad, t, ok = _check_motion3d(segments, radii, times)
     goal, targets, poles = _check_scene3d(goal, targets, poles)
-    if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
-        raise ValueError(f"fps must be in (0, 100], got {fps!r}")
-    frames = _pick(ok, int(max_frames))
+    frames, durations = gif_timing(ok, t, speed, fps, int(max_frames))
     lo, hi = _limits(seg[ok], rad, ground_z, goal, targets, poles)
     fig = Figure(figsize=(6.0, float(np.clip(6.0 * _screen_aspect(lo, hi, elev, azim), 3.5, 7.0))))
     FigureCanvasAgg(fig)
@@ -286,8 +326,9 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=
         fig.suptitle(title, fontsize=10)
     fig.canvas.draw()
     ppm = _points_per_metre(ax, lo, hi)
+    _fit_ticks(ax, lo, hi)
     _ground(ax, lo, hi, ground_z)
-    _markers(ax, lo, hi, goal, targets, poles, ppm)
+    _markers(ax, lo, hi, goal, targets, poles, ppm, ground_z=ground_z, goal_label=goal_label)
     lines, dots = _draw_figure(ax, seg[frames[0]], rad, colormaps["Blues"](0.85), ppm)
     clock = ax.text2D(0.02, 0.97, "", transform=ax.transAxes, va="top",
                       family="monospace", fontsize=9)
@@ -296,28 +337,46 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, targets=
         lines.set_segments(seg[i])
         p = seg[i].reshape(-1, 3)
         dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
-        clock.set_text(f"t = {t[i]:6.2f} s")
+        clock.set_text(f"t = {t[i]:5.2f} s\n{speed_text(speed)}")
         fig.canvas.draw()
         rgba = np.asarray(fig.canvas.buffer_rgba())
         images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
             256, method=Image.Quantize.MEDIANCUT))
-    with atomic_output(path) as tmp:
-        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                       duration=max(int(round(1000 / fps)), 20), loop=0)
+    save_gif(path, images, durations)
     return len(images)
 
 
 # ------------------------------------------------------------- dispatcher
 
-def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, targets=None,
-               view: dict | None = None) -> None:
+def motion_events(traj, e: int = 0) -> list[tuple[int, str]]:
+    """Take-off, apex and landing frames of episode ``e`` (airborne = no
+    ground contact force at any contact point over a frame's interval,
+    height = the centre of mass's; :func:`gpmotion.frames.flight_events`)
+    and the frames where the centre of mass passes under each limbo pole."""
+    cf = traj.contact_force[e]
+    poles = [(float(x), "under the pole") for x in traj.scene.poles[:, 0]]
+    events = crossing_events(traj.times, traj.com[e][:, 0], poles)
+    if traj.scene.ground and cf.shape[-1]:
+        height = traj.com[e][:, 2 if traj.is3d else 1]
+        events += flight_events(traj.times, height, cf.max(axis=1) == 0)
+    return sorted(events)
+
+
+def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=None,
+               targets=None, view: dict | None = None, speed: float = 1.0) -> None:
     """Filmstrip PNG and/or GIF of episode ``e`` of a Trajectory: the planar
     renderer (:mod:`gpmotion.render`) for planar figures, the 3-D one otherwise.
 
-    Scene: ground (if any), limbo poles and the goal come from ``traj.scene``;
-    ``targets`` (3-D only): extra points ``[n, 3]`` to mark.  ``view`` (3-D
-    only; a task's ``view``): camera ``elev``/``azim``, ``bodies`` to draw
-    (a close-up: the axis limits follow them) and ``ground`` (False: no grid).
+    Scene: ground (if any) and limbo poles come from ``traj.scene``; the goal
+    is drawn only when ``task`` names it (its ``goal_label``, e.g.
+    "target"): a passive figure's scene has a placeholder goal at the origin
+    that means nothing.  Filmstrip frames include the motion's take-offs,
+    apexes, landings and pole passages (:func:`motion_events`) and the
+    task's ``picture_events(traj, e)`` (``[(frame, word)]``) if it has them.  The GIF plays at ``speed``
+    × real time.  ``targets`` (3-D only): extra points ``[n, 3]`` to mark.
+    ``view`` (3-D only; default: the task's ``view``): camera
+    ``elev``/``azim``, ``bodies`` to draw (a close-up: the axis limits follow
+    them) and ``ground`` (False: no grid).
     """
     from .model import Model
     if not 0 <= e < traj.n_episodes:
@@ -327,15 +386,22 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, target
     radii = traj.figure.model.seg_r
     poles = sc.poles if len(sc.poles) else None
     ground_z = sc.ground_z if sc.ground else None
+    goal_label = getattr(task, "goal_label", None)
+    events = motion_events(traj, e)
+    if hasattr(task, "picture_events"):        # a task's own moments, e.g. "touch"
+        events = sorted(events + list(task.picture_events(traj, e)))
     if isinstance(traj.figure.model, Model):
         from . import render
-        kw = dict(poles=poles, ground_z=ground_z, goal=tuple(sc.goal), title=title)
+        kw = dict(poles=poles, ground_z=ground_z, title=title, goal_label=goal_label,
+                  goal=tuple(sc.goal) if goal_label else None)
         if filmstrip:
-            render.filmstrip(filmstrip, seg, radii, traj.times, **kw)
+            render.filmstrip(filmstrip, seg, radii, traj.times, events=events, **kw)
         if gif:
-            render.animate(gif, seg, radii, traj.times, **kw)
+            render.animate(gif, seg, radii, traj.times, speed=speed, **kw)
         return
-    view = dict(view or {})
+    if view is None:
+        view = getattr(task, "view", None) or {}
+    view = dict(view)
     bodies = view.pop("bodies", None)
     if bodies is not None:
         names = traj.figure.body_names
@@ -346,9 +412,10 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, target
         seg, radii = seg[:, keep], radii[keep]
     if not view.pop("ground", True):
         ground_z = None
-    goal = (float(sc.goal[0]), float(sc.goal_y), float(sc.goal[1]))
-    kw = dict(poles=poles, ground_z=ground_z, goal=goal, targets=targets, title=title, **view)
+    goal = (float(sc.goal[0]), float(sc.goal_y), float(sc.goal[1])) if goal_label else None
+    kw = dict(poles=poles, ground_z=ground_z, goal=goal, goal_label=goal_label,
+              targets=targets, title=title, **view)
     if filmstrip:
-        filmstrip3d(filmstrip, seg, radii, traj.times, **kw)
+        filmstrip3d(filmstrip, seg, radii, traj.times, events=events, **kw)
     if gif:
-        animate3d(gif, seg, radii, traj.times, **kw)
+        animate3d(gif, seg, radii, traj.times, speed=speed, **kw)

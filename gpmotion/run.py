@@ -232,10 +232,7 @@ def write_artifacts(rd: RunDir, task, family, genome, traj):
         plot_gp_trees(rd.artifact("trees.png"), task, family, genome)
     rows = rd.read_log()
     if rows:
-        x = [int(r["evaluations"]) for r in rows]
-        render.curve(rd.artifact("curve.png"), x, [float(r["best_so_far"]) for r in rows],
-                     median=[float(r["gen_median"]) for r in rows], xlabel="evaluations",
-                     title=f"{task.name} ({family.name})")
+        render.run_curve(rd.artifact("curve.png"), rows, task, title=f"{task.name} ({family.name})")
 
 
 def plot_gp_trees(path, task, family, genome):
@@ -247,4 +244,4 @@ def plot_gp_trees(path, task, family, genome):
 def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0, task=None):
     """Filmstrip PNG and/or GIF of one episode, planar or 3-D (with the task's view)."""
     from .render3d import render_any
-    render_any(traj, filmstrip, gif, title=title, e=e, view=getattr(task, "view", None))
+    render_any(traj, filmstrip, gif, title=title, e=e, task=task)

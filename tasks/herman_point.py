@@ -44,6 +44,7 @@ class HermanPoint(Task):
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = f"aim point ({GOAL_REACH} m out)"   # pictures: the scene goal, captioned
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              Term("bent", WEIGHT, phase=(0.2, 0.5),

@@ -32,6 +32,7 @@ class HermanTouchNose(Task):
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = "nose at rest"    # pictures: the scene goal, captioned
     terms = (Term("nose", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–nose distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              *style_terms())
@@ -51,6 +52,11 @@ class HermanTouchNose(Task):
 
     def success(self, traj, m):
         return m["nose_end"] < TOUCH
+
+    def picture_events(self, traj, e=0):
+        """Filmstrip frames to keep: the first touch."""
+        near = fingertip_distance(traj, "nose")[e] < TOUCH
+        return [(int(near.argmax()), "first touch")] if near.any() else []
 
     def describe(self, traj, m):
         d = fingertip_distance(traj, "nose")[0]

@@ -35,6 +35,7 @@ class HermanTouchObject(Task):
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = "object"          # pictures: the scene goal, captioned
     terms = (Term("object", MAIN_WEIGHT, main=True, doc="fingertip–object distance at the end (m)"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"

@@ -78,6 +78,7 @@ class HermanWave(Task):
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS
     view = VIEW
+    goal_label = "raised-hand point"   # pictures: the scene goal, captioned
     terms = (Term("wave", MAIN_WEIGHT, main=True,
                   doc="mean of: hand below the shoulder, too few passes, too small a swing (0..1)"),
              *style_terms(rest=False))

@@ -51,6 +51,7 @@ HOP_TERMS = (
 class LampHop(Task):
     name = "lamp_hop"
     figure = "lamp"
+    goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target point on the floor"
     params = {"distance": 0.4, "seconds": 3.0}
     terms = HOP_TERMS

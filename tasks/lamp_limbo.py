@@ -17,6 +17,7 @@ POLE_RADIUS = 0.01
 class LampLimbo(Task):
     name = "lamp_limbo"
     figure = "lamp"
+    goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target, passing under a limbo pole"
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42}   # standing, the lamp is 0.50 m tall
     terms = HOP_TERMS + (

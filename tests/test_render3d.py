@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
+from PIL import Image, ImageSequence
 
 import gpmotion
 from gpmotion import render3d
@@ -115,7 +115,9 @@ def test_render_any_draws_planar_and_3d_trajectories(tmp_path, figure):
     render3d.render_any(traj, tmp_path / "f.png", tmp_path / "m.gif", title=figure)
     assert open_image(tmp_path / "f.png")[0].format == "PNG"
     im, n = open_image(tmp_path / "m.gif")
-    assert im.format == "GIF" and n == traj.q.shape[1]
+    assert im.format == "GIF" and 2 <= n <= traj.q.shape[1]
+    with Image.open(tmp_path / "m.gif") as im:                # real time: 0.5 s + one frame
+        assert 500 <= sum(f.info["duration"] for f in ImageSequence.Iterator(im)) <= 560
     # only what was asked for
     render3d.render_any(traj, gif=tmp_path / "only.gif")
     assert (tmp_path / "only.gif").exists() and not (tmp_path / "only.png").exists()
@@ -138,3 +140,99 @@ def test_a_task_view_draws_a_close_up_of_some_bodies(tmp_path, monkeypatch):
     assert task.view["bodies"] == names                   # the task's view is not consumed
     with pytest.raises(ValueError, match="unknown bodies"):
         render3d.render_any(traj, tmp_path / "g.png", view={"bodies": ["tail"]})
+
+
+# ---------------------------------------------------- what the pictures show
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The matplotlib Figures render3d would have saved, by file name."""
+    figs = {}
+    monkeypatch.setattr(render3d, "_save_png", lambda fig, path, dpi: figs.__setitem__(
+        Path(path).name, fig))
+    return figs
+
+
+def stars(fig):
+    return [ln for ax in fig.axes for ln in ax.lines if ln.get_marker() == "*"]
+
+
+def texts(fig):
+    return [t.get_text().strip() for ax in fig.axes for t in ax.texts]
+
+
+def test_a_3d_goal_is_drawn_only_for_a_task_that_names_it(drawn, tmp_path):
+    task = gpmotion.get_task("herman_touch_nose")
+    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    render3d.render_any(traj, tmp_path / "task.png", task=task)
+    assert len(stars(drawn["task.png"])) >= 1 and "nose at rest" in texts(drawn["task.png"])
+    render3d.render_any(traj, tmp_path / "passive.png", view=task.view)
+    assert stars(drawn["passive.png"]) == []
+
+
+def test_a_3d_pole_is_a_bar_on_posts_labelled_with_its_height(drawn, tmp_path):
+    seg, t = walking_chain(n_frames=10)
+    render3d.filmstrip3d(tmp_path / "p.png", seg, RADII, t, poles=[[0.6, 1.2, 0.05]], strip=False)
+    ax = drawn["p.png"].axes[0]
+    assert "pole: underside 1.15 m up" in texts(drawn["p.png"])
+    drawn["p.png"].canvas.draw()                              # projects the 3-D segments
+    widths = sorted(len(c.get_segments()) for c in ax.collections if hasattr(c, "get_segments"))
+    assert 1 in widths and 2 in widths                        # one bar, two posts
+
+
+def _tick_gaps(fig):
+    """Per axis of the big 3-D axes: the screen distances (points) between
+    consecutive numbered ticks, measured along the box edge."""
+    from mpl_toolkits.mplot3d import proj3d
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    lims = [ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d()]
+    M = ax.get_proj()
+    gaps = {}
+    for i, axis in enumerate((ax.xaxis, ax.yaxis, ax.zaxis)):
+        lo, hi = sorted(lims[i])
+        locs = [v for v in axis.get_majorticklocs() if lo <= v <= hi]
+        if not axis.get_major_formatter().format_ticks(locs)[0]:
+            continue                                        # numbers hidden
+        pts = []
+        for v in locs:
+            p = [lim[0] for lim in lims]
+            p[i] = v
+            x, y, _ = proj3d.proj_transform(*p, M)
+            pts.append(ax.transData.transform((x, y)) * 72.0 / fig.dpi)
+        gaps["xyz"[i]] = np.hypot(*np.diff(np.array(pts), axis=0).T)
+    return gaps
+
+
+def test_3d_tick_labels_have_room(drawn, tmp_path):
+    """The close-up of Herman crammed eleven x tick labels into 2 cm, one
+    running into the next (and "z (m)" sat on the z tick labels: checked by
+    eye, the label now has padding)."""
+    task = gpmotion.get_task("herman_touch_nose")
+    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    render3d.render_any(traj, tmp_path / "nose.png", view=task.view)
+    seg, t = walking_chain(n_frames=10)
+    render3d.filmstrip3d(tmp_path / "walk.png", seg, RADII, t)
+    for name in ("nose.png", "walk.png"):
+        gaps = _tick_gaps(drawn[name])
+        assert "z" in gaps                                    # the height is always numbered
+        for axis, g in gaps.items():
+            assert g.min() >= 30, (name, axis, g)
+
+
+def test_animate3d_plays_in_real_time(tmp_path):
+    seg, t = walking_chain(n_frames=151, duration=1.5)         # 100 frames/s
+    render3d.animate3d(tmp_path / "w.gif", seg, RADII, t, fps=10, dpi=30)
+    with Image.open(tmp_path / "w.gif") as im:
+        d = [f.info["duration"] for f in ImageSequence.Iterator(im)]
+    assert set(d) == {100} and 1500 <= sum(d) <= 1600
+
+
+def test_a_task_adds_its_own_moments_to_the_filmstrip(monkeypatch, tmp_path):
+    task = gpmotion.get_task("herman_touch_nose")
+    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    seen = {}
+    monkeypatch.setattr(render3d, "filmstrip3d", lambda *a, **kw: seen.update(kw))
+    monkeypatch.setattr(task, "picture_events", lambda traj, e: [(3, "first touch")], raising=False)
+    render3d.render_any(traj, tmp_path / "f.png", task=task)
+    assert (3, "first touch") in seen["events"]
