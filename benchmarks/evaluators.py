@@ -8,7 +8,8 @@ Measures on this machine:
   * evaluations/s: in-process (numba threads; and one thread), process pool
     (``--workers``), Dask LocalCluster (``--workers``), same genomes, results
     checked bitwise equal;
-  * per-task overhead of each backend: throughput of N no-op tasks submitted
+  * per-task overhead of each backend (Dask: the TLS local cluster gpmotion
+    starts, and the same over plain tcp): throughput of N no-op tasks submitted
     at once (the serialized, central cost per task: client + scheduler, or the
     pool's feeder thread) and the round-trip latency of one task at a time;
   * a paper estimate of the chunk size for ``--target-workers`` workers.
@@ -160,6 +161,10 @@ def main(argv=None):
                                              "chunk_size": dev.last_chunk_size, "startup_s": start}
             thr, lat = dask_overhead(dev.client, args.tasks, args.latency_tasks)
             res["overhead"]["dask"] = {"per_task_throughput_s": thr, "per_task_latency_s": lat}
+        # the same without TLS: what the local cluster's throwaway certificate costs per task
+        with DaskEvaluator(task, fam, "local", workers=args.workers, local_tls=False) as dev:
+            thr, lat = dask_overhead(dev.client, args.tasks, args.latency_tasks)
+            res["overhead"]["dask_tcp"] = {"per_task_throughput_s": thr, "per_task_latency_s": lat}
 
     # paper estimate
     W, E = args.target_workers, args.efficiency

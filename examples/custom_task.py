@@ -7,7 +7,7 @@ the built-in tasks pass.
 import numpy as np
 
 import gpmotion
-from gpmotion.task import Task, Term, register_task
+from gpmotion import Task, Term, register_task
 
 
 @register_task
@@ -28,6 +28,5 @@ class LampReach(Task):
 
 if __name__ == "__main__":
     gpmotion.check_task("lamp_reach")
-    from gpmotion.run import RunConfig, run
-    run(RunConfig(task="lamp_reach", search={"population": 100, "generations": 10}),
-        "runs/example-lamp-reach", force=True)
+    gpmotion.run(gpmotion.RunConfig(task="lamp_reach", search={"population": 100, "generations": 10}),
+                 "runs/example-lamp-reach", force=True)

@@ -3,7 +3,8 @@
 gpmotion's toolbox gives DEAP individuals that are lists of trees (one per
 lamp joint); its ``map`` turns eaSimple's per-individual evaluations into one
 batched rollout per generation.  For checkpoints, cost reuse and a hall of
-fame that respects the style phase-in, use ``gpmotion.search.gp.GPSearch``.
+fame that respects the style phase-in, use ``gpmotion.run`` (GPSearch).
+The best is saved as a controller file ``gpmotion replay`` reads.
 
     python examples/deap_easimple.py          # ~10 s after numba's first compile
 """
@@ -12,8 +13,7 @@ import random
 import numpy as np
 from deap import algorithms, tools
 
-from gpmotion.gp.toolbox import evaluate_population, make_toolbox
-from gpmotion.task import get_task
+from gpmotion import evaluate_population, get_task, make_toolbox, save_controller
 
 GENERATIONS = 5
 
@@ -38,4 +38,5 @@ print(f"best cost {best.fitness.values[0]:.4f} when found, "
       f"{full.costs[0]:.4f} with every style term on")
 for joint, tree in zip(task.fig.actuator_names, best):
     print(f"  {joint}: {tree}")
-print(toolbox.family.to_json(best))
+save_controller("runs/deap_easimple_best.json", task, best, family=toolbox.family)
+print("saved runs/deap_easimple_best.json: gpmotion replay runs/deap_easimple_best.json")

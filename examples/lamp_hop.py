@@ -4,8 +4,7 @@
 """
 import sys
 
-from gpmotion.replay import load_controller, replay_genome
-from gpmotion.run import RunConfig, run
+from gpmotion import RunConfig, load_controller, replay_genome, run
 
 out = sys.argv[1] if len(sys.argv) > 1 else "runs/example-lamp-hop"
 cfg = RunConfig(task="lamp_hop", family="gp", seed=1, params={"distance": 0.4},

@@ -5,8 +5,7 @@ Same as: gpmotion run lamp_limbo --param pole_height=0.38,0.42,0.46
 
     python examples/limbo_series.py
 """
-from gpmotion.records import read_json
-from gpmotion.run import RunConfig, run
+from gpmotion import RunConfig, read_json, run
 
 for height in (0.38, 0.42, 0.46):
     out = f"runs/example-limbo/pole_height={height}"

@@ -5,8 +5,7 @@ shuffle, `w_rotations` a cartwheel.  Prints the gait each run found.
 
     python examples/starman_styles.py
 """
-from gpmotion.records import read_json
-from gpmotion.run import RunConfig, run
+from gpmotion import RunConfig, read_json, run
 
 for style, weights in (("plain", {}), ("shuffle", {"w_contact_distance": 0.5}),
                        ("cartwheel", {"w_rotations": 1.0})):

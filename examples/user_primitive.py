@@ -1,8 +1,7 @@
 """Define a GP primitive and check it (run: python examples/user_primitive.py)."""
 import math
 
-from gpmotion.check import check_primitive
-from gpmotion.gp.primitives import primitive
+from gpmotion import check_primitive, primitive
 
 
 @primitive("tanh", arity=1)

@@ -24,24 +24,27 @@ def _mount_plugin_packages():
 
 
 _mount_plugin_packages()
+__version__ = "0.1.0"          # before the imports below: run.py records it
+
+from .check import check_primitive, check_task
+from .evaluate import Evaluation
+from .evaluators import make_evaluator
+from .families import make_family
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
+from .gp.primitives import primitive
+from .gp.toolbox import evaluate_population, make_toolbox
 from .model import Figure, Model, Scene, make_scene
+from .plugins import load_folder as load_plugins
+from .records import read_json
+from .replay import load_controller, replay_genome
+from .controller_file import save_controller
+from .run import RunConfig, run     # the function: `gpmotion.run(cfg)`; the module is gpmotion.run's home
 from .sim.rollout import Trajectory, rollout, simulate
 from .task import Ease, Task, Term, get_task, register_task, task_names
 
-
-def check_primitive(*args, **kw):
-    """Public contract check of a GP primitive (see gpmotion.check)."""
-    from .check import check_primitive as f
-    return f(*args, **kw)
-
-
-def check_task(*args, **kw):
-    """Public contract check of a task (see gpmotion.check)."""
-    from .check import check_task as f
-    return f(*args, **kw)
-
-__version__ = "0.1.0"
-__all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task", "task_names",
-           "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec", "figure_names",
-           "load_figure", "make_scene", "register_figure", "rollout", "simulate"]
+__all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task",
+           "task_names", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
+           "figure_names", "load_figure", "make_scene", "register_figure", "rollout", "simulate",
+           "primitive", "load_plugins", "RunConfig", "run", "load_controller", "replay_genome",
+           "save_controller", "read_json", "make_family", "make_evaluator", "Evaluation",
+           "make_toolbox", "evaluate_population", "__version__"]

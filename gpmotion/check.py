@@ -11,6 +11,7 @@ import inspect
 import itertools
 import math
 import numbers
+from pathlib import Path
 
 import numpy as np
 
@@ -53,14 +54,23 @@ def njit_copy(prim: registry.Primitive):
     return getattr(module, prim.copy_name)
 
 
-def check_primitive(name_or_prim, *, n_random: int = 300, seed: int = 0) -> None:
+def check_primitive(name_or_prim, *, plugins=None, n_random: int = 300, seed: int = 0) -> None:
     """Raise AssertionError (clear message) unless the primitive is fit for the interpreter.
+
+    ``name_or_prim``: a registered name, a Primitive or an ``@primitive``
+    function.  A plugin's primitive is registered once its folder is loaded:
+    pass ``plugins="my_plugins"`` (a folder or a list) or call
+    ``gpmotion.load_plugins`` first; an unknown name is a ValueError.
 
     Checks: declared arity matches the signature; its copy compiles in numba;
     njit and Python agree on random inputs and on every combination of
     EDGE_VALUES; results are never NaN (infinities are fine: the interpreter
     saturates them to +-1e6).
     """
+    if plugins is not None:
+        from gpmotion.plugins import load_folder
+        for folder in [plugins] if isinstance(plugins, (str, Path)) else plugins:
+            load_folder(folder)
     p = _resolve(name_or_prim)
     where = f"primitive {p.name!r} ({p.file})"
     params = list(inspect.signature(p.func).parameters.values())

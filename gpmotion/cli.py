@@ -1,4 +1,5 @@
-"""The ``gpmotion`` command: list, run, resume, replay, render, check, bench.
+"""The ``gpmotion`` command: list, show, run, resume, replay, render, compare, export,
+check, bench, help.
 
 Bad input (unknown task, malformed file, bad value, existing run directory)
 prints one line ``gpmotion: error: ...`` and exits with code 2.
@@ -9,13 +10,29 @@ import argparse
 import sys
 from pathlib import Path
 
-EPILOG = """examples:
+STYLE_HELP = """costs and phased style points:
+  A cost is lower-is-better: a main goal (e.g. metres from the target) plus
+  style terms (arrive early, don't fall, end neutral...).  As in Gritz & Hahn,
+  each style term phases in: its weight ramps from 0 to full over a window of
+  run progress (generation / generations), so the search first learns the
+  main goal.  While terms phase in, a generation's costs (best, median) are
+  under that generation's weights: "best" can rise although no controller got
+  worse, and "solved" counts the controllers passing the success test.  The
+  final best.json is re-scored with every term at full weight; `gpmotion
+  replay` shows each term's value, weight and phase.  `gpmotion show TASK`
+  lists a task's terms with their phase-in windows.
+"""
+
+EPILOG = STYLE_HELP + """
+examples:
   gpmotion run lamp_hop                         evolve a hopping lamp (GP, defaults)
   gpmotion run lamp_limbo --param pole_height=0.38,0.42,0.46
   gpmotion run starman_travel --controller bsr-time
   gpmotion replay runs/lamp_hop-gp-seed0        why the best controller scored as it did
   gpmotion render --figure lamp --seconds 2     a filmstrip of the lamp settling
   gpmotion list tasks
+  gpmotion show lamp_hop                        a task's parameters, terms, figure and senses
+  gpmotion help run                             every option of a command
 """
 
 
@@ -25,93 +42,132 @@ def _params(items):
         if "=" not in it:
             raise ValueError(f"--param expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
+        if k.strip() == "figure":
+            raise ValueError("--param figure=...: use --figure VARIANT.toml (stored with the run)")
         out[k.strip()] = v.strip()
     return out
 
 
 def _add_run_args(p):
-    p.add_argument("task", help="task name (gpmotion list tasks)")
+    from .cli_options import add_arguments
+    p.add_argument("task", help="task name (gpmotion list tasks; gpmotion show TASK)")
     p.add_argument("--controller", default="gp", help="gp | bsr-sense | bsr-time (default gp)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--seeds", type=int, default=1, help="independent runs with seeds seed..seed+K-1")
-    p.add_argument("--generations", type=int, help="GP generations / serial-search rounds")
-    p.add_argument("--population", type=int, help="GP population size")
-    p.add_argument("--selection", choices=["roulette", "tournament"],
-                   help="GP selection (default roulette, fitness-proportionate)")
-    p.add_argument("--p-crossover", type=float, help="GP crossover probability (default 0.9)")
-    p.add_argument("--p-mutation", type=float, help="GP mutation probability (default 0.02)")
-    p.add_argument("--p-creep", type=float,
-                   help="GP constant-creep probability: Gaussian steps on one tree's constants "
-                        "(default 0, herman tasks 0.1)")
-    p.add_argument("--islands", type=int,
-                   help="GP island model: demes that breed apart and pass their best around a "
-                        "ring every 5 generations (default 1)")
-    p.add_argument("--elitism", type=int, help="GP elites copied unchanged (default 1)")
-    p.add_argument("--max-size", type=int, help="GP nodes per tree cap (default 200)")
-    p.add_argument("--working", type=int, help="serial search: working controllers C (default 10)")
-    p.add_argument("--reseed-every", type=int, help="serial search: reseeding interval (default 200)")
-    p.add_argument("--rules", type=int, help="BSR rules per controller")
-    p.add_argument("--t-per", type=float, help="time-based BSR period (s; default: episode length)")
-    p.add_argument("--actuation", choices=["pd", "kinematic"], help="default: the family's own")
+    p.add_argument("--seeds", type=int, default=1,
+                   help="independent runs with seeds seed..seed+K-1; prints an aggregate at the end")
+    p.add_argument("--actuation", choices=["pd", "kinematic"],
+                   help="pd: targets drive PD servos (GP default); kinematic: joints follow "
+                        "targets with a time constant τ (BSR default)")
+    p.add_argument("--figure", metavar="VARIANT.toml",
+                   help="run the task on a figure variant, a TOML file or a registered figure "
+                        "(it must have the joints, sites, contacts and senses the task uses)")
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
-                   help="task parameter; VALUE may be a comma list to run a series")
+                   help="task parameter (gpmotion show TASK); VALUE may be a comma list to run a series")
     p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
     p.add_argument("--force", action="store_true", help="move an existing run directory aside")
     p.add_argument("--resume", action="store_true", help="continue an existing run directory")
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--threads", type=int, help="numba threads in this process")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
-                   help="folder of extra primitives/tasks (repeatable)")
+    _add_plugins_arg(p)
+    _add_tls_args(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
+    add_arguments(p)
+
+
+def _add_plugins_arg(p):
+    p.add_argument("--plugins", action="append", default=[], metavar="DIR",
+                   help="folder of extra primitives/tasks/figures (repeatable); the only way, "
+                        "besides installed entry points, that gpmotion runs code not its own")
+
+
+def _add_tls_args(p):
+    p.add_argument("--tls-ca-file", metavar="PEM", help="Dask TLS: CA certificate (tls:// scheduler)")
+    p.add_argument("--tls-cert", metavar="PEM", help="Dask TLS: this client's certificate")
+    p.add_argument("--tls-key", metavar="PEM", help="Dask TLS: this client's private key")
+
+
+def _backend(args) -> dict:
+    """This invocation's evaluator settings (TLS files), never recorded in the run."""
+    return {k: getattr(args, k) for k in ("tls_ca_file", "tls_cert", "tls_key")
+            if getattr(args, k, None)}
+
+
+def _activate_plugins(args) -> list:
+    from .plugins import activate
+    return activate(getattr(args, "plugins", []) or [])
 
 
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="registered tasks, figures, primitives, controller families")
+    from . import __version__
+    ap.add_argument("--version", action="version", version=f"gpmotion {__version__}")
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+    p = sub.add_parser("help", help="help on a command: gpmotion help run")
+    p.add_argument("topic", nargs="?", help="a command name")
+    p = sub.add_parser("list", help="registered tasks, figures, primitives, controller families "
+                       "(gpmotion show TASK for one task's details)")
     p.add_argument("what", nargs="?", default="all",
                    choices=["all", "tasks", "figures", "primitives", "controllers"])
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
-    _add_run_args(sub.add_parser("run", help="evolve a controller for a task"))
+    _add_plugins_arg(p)
+    p = sub.add_parser("show", help="a task's parameters, terms (doc, weight, phase-in), figure, "
+                       "controlled joints, sites and senses")
+    p.add_argument("task", help="task name (gpmotion list tasks)")
+    _add_plugins_arg(p)
+    _add_run_args(sub.add_parser("run", help="evolve a controller for a task",
+                                 description="Evolve a controller for a task.", epilog=STYLE_HELP,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter))
     p = sub.add_parser("resume", help="continue a killed or interrupted run")
-    p.add_argument("run_dir")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("run_dir", help="a run directory (runs/TASK-CONTROLLER-seedN)")
+    p.add_argument("--quiet", action="store_true", help="no per-generation progress")
+    p.add_argument("--workers", type=int, help="resume on a process pool (replaces the recorded backend)")
+    p.add_argument("--scheduler", help="resume on Dask: 'local' or tcp://HOST:PORT (replaces it too)")
+    _add_tls_args(p)
+    _add_plugins_arg(p)
     p = sub.add_parser("replay", help="re-simulate a controller and explain its score")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--out", help="also write filmstrip.png and motion.gif here")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
+    _add_plugins_arg(p)
     p = sub.add_parser("render", help="filmstrip PNG (and GIF) of a controller or a passive figure")
     p.add_argument("source", nargs="?", help="run directory or controller JSON")
     p.add_argument("--figure", help="render a figure holding its neutral pose instead")
-    p.add_argument("--seconds", type=float, default=2.0)
-    p.add_argument("-o", "--output", default="filmstrip.png")
+    p.add_argument("--seconds", type=float,
+                   help="simulated seconds for --figure (default 2; a controller runs its task's episode)")
+    p.add_argument("-o", "--output", default="filmstrip.png", help="filmstrip PNG (default filmstrip.png)")
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
+    _add_plugins_arg(p)
     p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
-    p.add_argument("task")
-    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time")
-    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("task", help="task name (gpmotion list tasks)")
+    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time",
+                   help="comma list of controller families (default gp,bsr-sense,bsr-time)")
+    p.add_argument("--seeds", type=int, default=5, help="runs per family, seeds 0..K-1 (default 5)")
     p.add_argument("--budget", type=int, default=5000, help="evaluations per run (default 5000)")
     p.add_argument("--actuation", choices=["pd", "kinematic"], default="pd",
                    help="one actuation for every family (default pd)")
-    p.add_argument("--population", type=int, default=100, help="GP population (default 100)")
-    p.add_argument("--param", action="append", metavar="KEY=VALUE")
-    p.add_argument("--workers", type=int, default=0)
-    p.add_argument("--scheduler")
+    p.add_argument("--population", type=int, help="GP population (default 100; needs gp in --controllers)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="task parameter (gpmotion show TASK)")
+    p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
+    p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    _add_plugins_arg(p)
     p.add_argument("--force", action="store_true", help="overwrite a non-empty --out folder")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
-    p.add_argument("--bvh", required=True, metavar="OUT.bvh")
+    p.add_argument("--bvh", required=True, metavar="OUT.bvh", help="the BVH file to write")
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
+    _add_plugins_arg(p)
     p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
-    p.add_argument("--plugins", action="append", default=[], metavar="DIR")
+    _add_plugins_arg(p)
+    p.add_argument("--only-plugins", action="store_true",
+                   help="check only what the --plugins folders add, not the built-ins")
     sub.add_parser("bench", help="simulator throughput (gpmotion bench --help)", add_help=False)
     return ap
 
@@ -121,34 +177,56 @@ def main(argv=None) -> int:
     if argv[:1] == ["bench"]:
         from .bench import main as bench_main
         return bench_main(argv[1:]) or 0
-    args = parser().parse_args(argv)
+    ap = parser()
+    if argv[:1] == ["help"]:
+        return _help(ap, argv[1:])
+    args = ap.parse_args(argv)
     try:
         return COMMANDS[args.cmd](args) or 0
     except KeyboardInterrupt as e:
         print(f"gpmotion: interrupted{': ' + str(e) if str(e) else ''}", file=sys.stderr)
         return 130
+    except BrokenPipeError:                 # `gpmotion show TASK | head`
+        sys.stderr.close()
+        return 0
     except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
-        if type(e).__name__ == "WorkerLost":
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost") and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
+        return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
+
+
+def _help(ap, topic):
+    """``gpmotion help [COMMAND]``: the same text as ``gpmotion COMMAND --help``."""
+    if not topic:
+        ap.print_help()
+        return 0
+    if topic[0] == "bench":
+        from .bench import main as bench_main
+        return bench_main(["--help"]) or 0
+    subs = next(a for a in ap._actions if isinstance(a, argparse._SubParsersAction)).choices
+    if topic[0] not in subs:
+        from .names import unknown
+        print(f"gpmotion: error: {unknown('command', topic[0], subs)}", file=sys.stderr)
         return 2
+    subs[topic[0]].print_help()
+    return 0
 
 
 def cmd_list(args):
     from . import figure_names
     from .families import FAMILIES
     from .gp import primitives
-    from .plugins import load_folder
     from .task import get_task, task_names
-    for d in args.plugins:
-        load_folder(d)
+    _activate_plugins(args)
     primitives.load_builtin()
     if args.what in ("all", "tasks"):
         print("tasks:")
         for n in task_names():
             t = get_task(n)
             print(f"  {n:<18} {t.figure:<9} {t.description}")
+        print("  (parameters, cost terms, joints and senses of one task: gpmotion show TASK)")
     if args.what in ("all", "figures"):
         print("figures:", ", ".join(figure_names()))
     if args.what in ("all", "primitives"):
@@ -157,35 +235,31 @@ def cmd_list(args):
         print("controllers:", ", ".join(FAMILIES))
 
 
+def cmd_show(args):
+    from .show import describe_task
+    _activate_plugins(args)
+    print(describe_task(args.task))
+
+
 def _run_configs(args):
+    from .cli_options import collect
+    from .families import FAMILIES
+    from .names import unknown
     from .records import validate_number
     from .run import RunConfig
+    if args.controller not in FAMILIES:
+        raise ValueError(unknown("controller", args.controller, FAMILIES))
     params = _params(args.param)
+    plugins = _activate_plugins(args)     # before the options: --primitives may name a plugin's
     series = {k: v.split(",") for k, v in params.items() if "," in v}
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
     validate_number("--seeds", args.seeds, lo=1, hi=10_000, integer=True)
-    for name, v, lo in (("--generations", args.generations, 1), ("--population", args.population, 2),
-                        ("--rules", args.rules, 1), ("--working", args.working, 2),
-                        ("--reseed-every", args.reseed_every, 1), ("--workers", args.workers, 0),
-                        ("--threads", args.threads, 1)):
-        validate_number(name, v, lo=lo, hi=10_000_000, integer=True, allow_none=True)
-    validate_number("--t-per", args.t_per, lo=1e-3, hi=1e3, allow_none=True)
-    validate_number("--p-crossover", args.p_crossover, lo=0, hi=1, allow_none=True)
-    validate_number("--p-mutation", args.p_mutation, lo=0, hi=1, allow_none=True)
-    validate_number("--p-creep", args.p_creep, lo=0, hi=1, allow_none=True)
-    validate_number("--islands", args.islands, lo=1, hi=10_000, integer=True, allow_none=True)
-    validate_number("--elitism", args.elitism, lo=0, hi=10**6, integer=True, allow_none=True)
-    validate_number("--max-size", args.max_size, lo=1, hi=512, integer=True, allow_none=True)
-    gp = args.controller == "gp"
-    search = ({"population": args.population, "generations": args.generations,
-               "selection": args.selection, "p_crossover": args.p_crossover,
-               "p_mutation": args.p_mutation, "p_creep": args.p_creep, "islands": args.islands,
-               "elitism": args.elitism,
-               "max_size": args.max_size} if gp else
-              {"n_working": args.working, "n_generations": args.generations,
-               "reseed_every": args.reseed_every})
-    fam = {} if gp else {"rules": args.rules, "t_per": args.t_per}
+    validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
+    validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
+    search, fam = collect(args, args.controller)
+    if args.figure:
+        params["figure"] = _figure_variant(args.task, args.figure)
     values = next(iter(series.values())) if series else [None]
     key = next(iter(series)) if series else None
     for seed in range(args.seed, args.seed + args.seeds):
@@ -195,11 +269,22 @@ def _run_configs(args):
                 p[key] = v
             name = _out_dir(args, seed, key, v)
             yield RunConfig(task=args.task, family=args.controller, seed=seed, params=p,
-                            family_options={k: v_ for k, v_ in fam.items() if v_ is not None},
-                            search={k: v_ for k, v_ in search.items() if v_ is not None},
+                            family_options=dict(fam), search=dict(search),
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
-                            plugins=[str(Path(d).resolve()) for d in args.plugins]), name
+                            plugins=list(plugins)), name
+
+
+def _figure_variant(task_name, path):
+    """The variant's spec, resolved (``extends`` merged), as plain data: stored in the
+    run's parameters, so the run does not depend on the TOML file staying put."""
+    from .figures import figure_names, load_spec, resolve_spec
+    if Path(path).is_file():
+        return resolve_spec(load_spec(path))
+    if path in figure_names():                       # a registered figure, e.g. herman_standing
+        return resolve_spec({"extends": path})
+    from .names import did_you_mean
+    raise ValueError(f"--figure: no such file or figure {path!r}{did_you_mean(path, figure_names())}")
 
 
 def _out_dir(args, seed, key, value) -> Path:
@@ -214,13 +299,32 @@ def _out_dir(args, seed, key, value) -> Path:
 
 def cmd_run(args):
     from .run import run
-    results = []
-    for cfg, out in _run_configs(args):
+    configs = list(_run_configs(args))        # every config validated before the first run
+    dirs = []
+    for cfg, out in configs:
         best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
-                             artifacts=not args.no_artifacts)
-        results.append((out, cost, rd))
+                             artifacts=not args.no_artifacts, backend=_backend(args))
+        dirs.append(rd.path)
         _summary(rd)
+    if len(dirs) > 1:
+        print(_aggregate(dirs))
     return 0
+
+
+def _aggregate(dirs) -> str:
+    """One line over the finished runs: median [min, max] final cost, how many solved."""
+    import numpy as np
+
+    from .records import read_json
+    recs = [read_json(d / "best.json", kind="best") for d in dirs if (d / "best.json").exists()]
+    if not recs:
+        return f"{len(dirs)} runs: none finished"
+    costs = np.array([r["final_cost"] for r in recs])
+    solved = sum(bool(r["success"]) for r in recs)
+    return (f"{len(recs)} runs: final cost (every term at full weight) median "
+            f"{np.median(costs):.4f} [min {costs.min():.4f}, max {costs.max():.4f}]; "
+            f"solved {solved}/{len(recs)}"
+            + (f"; {len(dirs) - len(recs)} stopped before the end" if len(recs) < len(dirs) else ""))
 
 
 def _summary(rd):
@@ -236,13 +340,30 @@ def _summary(rd):
 
 def cmd_resume(args):
     from .run import run
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet)
+    _refuse_series(Path(args.run_dir))
+    _activate_plugins(args)
+    backend = _backend(args)
+    if args.workers is not None or args.scheduler is not None:
+        backend.update(workers=args.workers or 0, scheduler=args.scheduler)
+    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend)
     _summary(rd)
+
+
+def _refuse_series(path: Path):
+    """A series folder (--seeds K, --param k=a,b) holds runs, not a config: name them."""
+    if (path / "config.json").exists() or not path.is_dir():
+        return
+    runs = sorted(str(c.parent) for c in path.glob("**/config.json"))
+    if runs:
+        more = f" (and {len(runs) - 3} more)" if len(runs) > 3 else ""
+        raise ValueError(f"{path} is a series of {len(runs)} runs; resume each: "
+                         + ", ".join(f"gpmotion resume {r}" for r in runs[:3]) + more)
 
 
 def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -283,12 +404,17 @@ def cmd_render(args):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
     if args.figure and args.trees:
         raise ValueError("--trees needs a GP controller, not --figure")
+    if args.source and args.seconds is not None:
+        raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
+                         "(the task's 'seconds' parameter)")
+    _activate_plugins(args)
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
-        validate_number("--seconds", args.seconds, lo=0.01, hi=120)
+        seconds = validate_number("--seconds", 2.0 if args.seconds is None else args.seconds,
+                                  lo=0.01, hi=120)
         fig = load_figure(args.figure)
-        traj = simulate(fig, args.seconds)
+        traj = simulate(fig, seconds)
         title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from .replay import load_controller, replay_genome
@@ -315,10 +441,15 @@ def cmd_compare(args):
             raise ValueError(f"--controllers: unknown {c!r}; known: {', '.join(FAMILIES)}")
     validate_number("--seeds", args.seeds, lo=1, hi=1000, integer=True)
     validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
-    validate_number("--population", args.population, lo=2, hi=10**6, integer=True)
+    if args.population is not None and "gp" not in ctrls:
+        raise ValueError("--population does not apply: it is the GP population size and "
+                         "--controllers has no gp")
+    population = validate_number("--population", 100 if args.population is None else args.population,
+                                 lo=2, hi=10**6, integer=True)
     out = args.out or f"runs/compare-{args.task}"
+    _activate_plugins(args)
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
-                       params=_params(args.param), population=args.population,
+                       params=_params(args.param), population=population,
                        workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
                        force=args.force)
     print(md)
@@ -330,6 +461,7 @@ def cmd_export(args):
     from .records import validate_number
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
+    _activate_plugins(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
@@ -342,15 +474,22 @@ def cmd_export(args):
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
-    from .plugins import load_folder
     from .task import task_names
-    for d in args.plugins:
-        load_folder(d)
+    if args.only_plugins and not args.plugins:
+        raise ValueError("--only-plugins needs --plugins DIR")
     primitives.load_builtin()
+    prims_before, tasks_before = set(primitives.names()), set(task_names())
+    _activate_plugins(args)
+    prims, tasks = primitives.names(), task_names()
+    if args.only_plugins:
+        prims = [n for n in prims if n not in prims_before]
+        tasks = [n for n in tasks if n not in tasks_before]
+        if not prims and not tasks:
+            raise ValueError(f"{', '.join(args.plugins)}: no primitives or tasks to check")
     bad = 0
-    for name in primitives.names():
+    for name in prims:
         bad += _report(f"primitive {name}", check_primitive, name)
-    for name in task_names():
+    for name in tasks:
         bad += _report(f"task {name}", check_task, name)
     return 1 if bad else 0
 
@@ -365,7 +504,7 @@ def _report(label, fn, arg):
         return 1
 
 
-COMMANDS = {"list": cmd_list, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
+COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
             "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export}
 
 if __name__ == "__main__":

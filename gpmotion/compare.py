@@ -31,6 +31,7 @@ import numpy as np
 
 from .evaluators import make_evaluator
 from .families import make_family
+from .plugins import loaded as loaded_plugins
 from .records import atomic_write_json, atomic_write_text, envelope
 from .replay import replay_genome
 from .search.adapters import make_search, serial_generations
@@ -75,7 +76,7 @@ def run_one(task, family_name, seed, budget, actuation, population, workers=0, s
     traj, costs, measures, ok = replay_genome(task, fam, actuation, search.best)
     controller = envelope("best", {
         "task": task.name, "params": dict(task.p), "family": fam.name,
-        "options": dict(fam.options), "actuation": actuation, "plugins": [],
+        "options": dict(fam.options), "actuation": actuation, "plugins": loaded_plugins(),
         "genome": fam.to_json(search.best), "cost": float(costs[0]), "seed": seed,
         "terms": task.breakdown(measures, 0, 1.0), "final_cost": float(costs[0]),
         "success": bool(ok[0]), "facts": task.describe(traj, measures)})

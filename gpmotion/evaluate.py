@@ -100,9 +100,15 @@ _CODE = None
 
 
 def spec_of(task: Task, family: Family, actuation: str, plugins=()) -> dict:
-    """Plain-data description a remote worker rebuilds the evaluator from."""
+    """Plain-data description a remote worker rebuilds the evaluator from.
+
+    ``plugins``: requirement records (:mod:`gpmotion.plugins`: name and digest),
+    never folder paths.
+    """
+    from .plugins import for_record
     return {"task": task.name, "params": dict(task.p), "family": family.name,
-            "options": dict(family.options), "actuation": actuation, "plugins": list(plugins),
+            "options": dict(family.options), "actuation": actuation,
+            "plugins": [{k: v for k, v in r.items() if k != "path"} for r in for_record(plugins)],
             "code": code_digest()}
 
 
@@ -117,9 +123,13 @@ def evaluator_from_spec(spec: dict, threads: int | None = None) -> InProcessEval
         if spec.get("code", code_digest()) != code_digest():
             raise ValueError("this worker runs different gpmotion code than the run's main process; "
                              "install the same version everywhere")
-        from .plugins import load_folder
-        for folder in spec.get("plugins", ()):
-            load_folder(folder)
+        # Plugin code reaches a worker only as sources shipped by the main process,
+        # checked against their digest; the spec's records are requirements.
+        from . import plugins
+        if any("entry_point" in r for r in spec.get("plugins", ())):
+            plugins.load_entry_points()
+        plugins.install_sources(spec.get("plugin_sources"))
+        plugins.require(spec.get("plugins", []), "this worker")
         task = get_task(spec["task"], **spec["params"])
         fam = make_family(spec["family"], task, **spec["options"])
         ev = _WORKER_CACHE[key] = InProcessEvaluator(task, fam, spec["actuation"], threads)

@@ -21,13 +21,27 @@ the unfinished chunks resubmitted; on Dask the scheduler reschedules a dead
 worker's tasks on other workers and we resubmit a chunk that still ends up
 ``KilledWorker``.  Exceptions raised *by* the evaluation (a malformed genome)
 are deterministic and propagate at once, without retries.
+
+Losing the Dask scheduler: the client waits ``reconnect_grace`` seconds for
+it to come back (a restarted scheduler at the same address), then re-warms the
+workers and resubmits the unfinished chunks; otherwise :class:`SchedulerLost`
+(the command exits with code 3; the checkpoint of the last generation is
+intact).  With no worker connected the evaluator says that it is waiting.
+
+Pool workers die with the run: on Linux the kernel sends them SIGKILL when
+the process that started them dies (``PR_SET_PDEATHSIG``), and everywhere a
+watchdog thread exits a worker whose parent has gone; they ignore Ctrl-C
+(SIGINT goes to the whole terminal's process group), so only the main process
+reacts to it.
 """
 from __future__ import annotations
 
 import math
 import os
 import re
+import signal
 import statistics
+import sys
 import threading
 import time
 import uuid
@@ -39,7 +53,8 @@ import numpy as np
 from .evaluate import Evaluation, InProcessEvaluator, evaluate_chunk, spec_of
 
 __all__ = ["ProcessPoolEvaluator", "DaskEvaluator", "make_evaluator", "check_scheduler",
-           "chunk_bounds", "plan_chunk_size", "WorkerLost", "DASK_MISSING"]
+           "chunk_bounds", "plan_chunk_size", "usable_workers", "WorkerLost", "SchedulerLost",
+           "DASK_MISSING", "EXIT_SCHEDULER_LOST"]
 
 DASK_MISSING = "the dask backend needs `pip install gpmotion[dask]`"
 
@@ -57,8 +72,37 @@ _WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
 _ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})$")
 
 
+# Exit code of a command whose Dask scheduler went away for good (README, "Clusters").
+EXIT_SCHEDULER_LOST = 3
+# Seconds a lost scheduler has to come back; seconds to reach it at the start.
+# (GPMOTION_RECONNECT_GRACE overrides the grace: a batch job may rather fail fast.)
+RECONNECT_GRACE = 30.0
+CONNECT_TIMEOUT = 10.0
+# Seconds between checks that any worker is connected while a batch waits.
+IDLE_POLL = 5.0
+
+
 class WorkerLost(RuntimeError):
     """Workers kept dying: the batch could not be finished within the retry budget."""
+
+
+class SchedulerLost(RuntimeError):
+    """The Dask scheduler went away and did not come back within the grace period."""
+    exit_code = EXIT_SCHEDULER_LOST
+
+
+def _say(msg: str) -> None:
+    print(f"gpmotion: {msg}", file=sys.stderr, flush=True)
+
+
+def usable_workers(requested: int, n: int | None = None) -> int:
+    """Worker processes worth starting: no more than the CPUs this process may
+    use (each worker runs one thread) nor than the genomes of a batch."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    return max(1, min(requested, cpus, n if n else requested))
 
 
 # ---- chunking ----------------------------------------------------------------
@@ -129,8 +173,36 @@ def _limit_threads():
         pass
 
 
-def _init_worker(spec: dict):
-    """Process-pool initializer: threads, imports, evaluator built (no simulation)."""
+def _die_with_parent(parent_pid: int, kernel_signal: bool) -> None:
+    """Make this pool worker exit when the run's process dies (even by SIGKILL).
+
+    Linux: PR_SET_PDEATHSIG (only when the pool was started from the main
+    thread: the signal fires when the *thread* that started us ends).  Everywhere:
+    a daemon thread that exits once our parent is gone (we are re-parented).
+    """
+    if kernel_signal and sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)            # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):                          # pragma: no cover - no libc
+            pass
+    if os.getppid() != parent_pid:                                  # died before we got here
+        os._exit(1)
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+    threading.Thread(target=watch, name="gpmotion-parent-watch", daemon=True).start()
+
+
+def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool = True):
+    """Process-pool initializer: die with the parent, ignore Ctrl-C, threads,
+    imports, evaluator built (no simulation)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the main process checkpoints and stops us
+    if parent_pid is not None:
+        _die_with_parent(parent_pid, kernel_signal)
     _limit_threads()
     from .evaluate import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
@@ -164,16 +236,19 @@ class _ChunkedEvaluator:
     target_task_seconds = TARGET_TASK_SECONDS     # least work per task for this backend's overhead
 
     def __init__(self, task, family, workers, actuation, chunk_size, plugins, max_retries):
+        from .plugins import loaded, require, sources_of
+        plugins = loaded() if plugins is None else plugins     # default: all the user loaded
         self.task = task
         self.family = family
         self.workers = workers
         self.actuation = actuation or family.default_actuation
         self.chunk_size = _check_chunk_size(chunk_size)
-        self.plugins = [os.path.abspath(os.fspath(p)) for p in plugins]
+        self.plugins = require(list(plugins), "the evaluator's plugins")   # records, loaded already
         if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
             raise ValueError(f"max_retries must be an integer >= 0, got {max_retries!r}")
         self.max_retries = max_retries
         self.spec = spec_of(task, family, self.actuation, self.plugins)
+        self.spec["plugin_sources"] = sources_of(self.plugins)     # workers need no shared disk
         self.evaluations = 0
         self.restarts = 0                     # worker losses recovered from
         self.seconds_per_evaluation = PRIOR_SECONDS_PER_STEP * task.n_steps
@@ -227,19 +302,27 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
     had not come back are resubmitted (up to ``max_retries`` rebuilds per batch).
     """
 
-    def __init__(self, task, family, workers: int, actuation=None, chunk_size=None, plugins=(),
-                 max_retries: int = 3):
-        super().__init__(task, family, _check_workers(workers), actuation, chunk_size, plugins,
+    def __init__(self, task, family, workers: int, actuation=None, chunk_size=None, plugins=None,
+                 max_retries: int = 3, quiet: bool = False):
+        requested = _check_workers(workers)
+        super().__init__(task, family, usable_workers(requested), actuation, chunk_size, plugins,
                          max_retries)
+        self.requested_workers = requested
+        self.quiet = quiet
+        if self.workers < requested and not quiet:
+            _say(f"--workers {requested}: using {self.workers}, the CPUs this process may use "
+                 "(each worker runs one thread)")
         self._executor = None
         self._chunk_function = _run_chunk
         self._executor_factory = self._spawn_pool
 
     def _spawn_pool(self):
         import multiprocessing
+        main = threading.current_thread() is threading.main_thread()
         return ProcessPoolExecutor(max_workers=self.workers,
                                    mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_init_worker, initargs=(self.spec,))
+                                   initializer=_init_worker, initargs=(self.spec, os.getpid(), main))
+        # Processes start on demand, one per waiting chunk: never more than a batch's chunks.
 
     def worker_pids(self) -> list[int]:
         """Process ids of the live pool's workers (empty before the first batch)."""
@@ -331,17 +414,56 @@ def check_scheduler(scheduler) -> str:
     return scheduler
 
 
+def make_security(scheduler: str, tls_ca_file=None, tls_cert=None, tls_key=None):
+    """distributed ``Security`` for this client, or None for plain tcp://.
+
+    ``local``: a throwaway self-signed certificate (``Security.temporary``) when
+    ``cryptography`` is installed, so no other user of the machine can submit
+    code to the local cluster's workers.  ``tls://``: the given PEM files, or
+    distributed's own config (``distributed.comm.tls.*``) for those not given.
+    """
+    files = {"tls_ca_file": tls_ca_file, "tls_client_cert": tls_cert, "tls_client_key": tls_key}
+    given = {k: v for k, v in files.items() if v}
+    for k, v in given.items():
+        if not os.path.isfile(v):
+            raise ValueError(f"--{k.replace('_client', '').replace('_', '-')}: no such file: {v}")
+    if scheduler == "local":
+        if given:
+            raise ValueError("--tls-* files are for a tls:// scheduler; a local cluster makes its own")
+        try:
+            from distributed.security import Security
+            return Security.temporary()
+        except ImportError:                         # no cryptography: loopback-only tcp
+            return None
+    if not scheduler.startswith(("tls://", "wss://")):
+        if given:
+            raise ValueError(f"--tls-* files given but the scheduler address {scheduler} is not "
+                             "tls://: use tls://HOST:PORT")
+        return None
+    from distributed.security import Security
+    sec = Security(require_encryption=True, **given)
+    if not sec.tls_ca_file:
+        raise ValueError(f"{scheduler}: TLS needs a CA certificate: --tls-ca-file PEM "
+                         "(or distributed.comm.tls.ca-file in the Dask config)")
+    return sec
+
+
 class DaskEvaluator(_ChunkedEvaluator):
     """Chunks of a batch as Dask tasks on a local or remote cluster.
 
     ``scheduler="local"`` starts a :class:`distributed.LocalCluster` of
     ``workers`` single-threaded worker processes bound to 127.0.0.1 (no
-    dashboard); an address connects a :class:`distributed.Client` to an existing
-    scheduler (start its workers with ``--nthreads 1`` and
+    dashboard; TLS with a throwaway certificate when ``cryptography`` is
+    installed); an address connects a :class:`distributed.Client` to an
+    existing scheduler (start its workers with ``--nthreads 1`` and
     ``NUMBA_NUM_THREADS=1``; workers with more threads still evaluate one chunk
-    at a time per process).  Workers are warmed once (imports, evaluator, numba
-    kernels).  A task whose worker dies is rescheduled by Dask; a chunk that
-    still fails with ``KilledWorker`` is resubmitted up to ``max_retries`` times.
+    at a time per process).  ``tls://`` addresses take ``tls_ca_file``,
+    ``tls_cert`` and ``tls_key`` (PEM files); ``local_tls=False`` makes a local
+    cluster plain tcp on loopback (benchmarks).  Workers are warmed once
+    (imports, evaluator, numba kernels).  A task whose worker dies is
+    rescheduled by Dask; a chunk that still fails with ``KilledWorker`` is
+    resubmitted up to ``max_retries`` times.  A lost scheduler has
+    ``reconnect_grace`` seconds to come back (see the module docstring).
     """
 
     # A Dask task costs ~2 ms of scheduler time and ~10 ms round trip (benchmarks/evaluators.py):
@@ -349,31 +471,60 @@ class DaskEvaluator(_ChunkedEvaluator):
     target_task_seconds = 0.1
 
     def __init__(self, task, family, scheduler: str = "local", workers: int = 2, actuation=None,
-                 chunk_size=None, plugins=(), max_retries: int = 3, timeout: float = 60.0):
+                 chunk_size=None, plugins=None, max_retries: int = 3,
+                 timeout: float = CONNECT_TIMEOUT, reconnect_grace: float | None = None,
+                 tls_ca_file=None, tls_cert=None, tls_key=None, quiet: bool = False,
+                 local_tls: bool = True):
         scheduler = check_scheduler(scheduler)
         workers = _check_workers(workers)
+        if scheduler == "local":
+            capped = usable_workers(workers)
+            if capped < workers and not quiet:
+                _say(f"--workers {workers}: using {capped}, the CPUs this process may use "
+                     "(each worker runs one thread)")
+            workers = capped
         super().__init__(task, family, workers, actuation, chunk_size, plugins, max_retries)
         distributed = _import_distributed()
+        import logging      # our one line (SchedulerLost) replaces the client's reconnect errors
+        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
+        self.security = (make_security(scheduler, tls_ca_file, tls_cert, tls_key)
+                         if scheduler != "local" or local_tls else None)
         self.scheduler = scheduler
+        self.reconnect_grace = _grace(reconnect_grace)
+        self.quiet = quiet
         self._cluster = None
         self._client = None
         self._token = uuid.uuid4().hex[:12]
         self._batch = 0
         try:
             if scheduler == "local":
+                tls = self.security is not None
                 self._cluster = distributed.LocalCluster(
                     n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                     dashboard_address=None, env=dict(_WORKER_ENV),
+                    protocol="tls://" if tls else "tcp://", security=self.security,
                     # no dashboard; its bare HTTP endpoints on a free loopback port, not :8787
                     scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
-                self._client = distributed.Client(self._cluster, timeout=timeout)
+                self._client = distributed.Client(self._cluster, timeout=timeout,
+                                                  security=self.security)
             else:
-                self._client = distributed.Client(scheduler, timeout=timeout)
+                self._client = self._connect(scheduler, timeout)
+            self._client._timeout = self.reconnect_grace     # how long the client itself retries
             self._client.run(_warm_worker, self.spec)
             self.workers = max(1, len(self._client.scheduler_info().get("workers", {})) or workers)
         except Exception:
             self.close()
             raise
+
+    def _connect(self, address: str, timeout: float):
+        """A client on ``address``, or one ValueError line saying why not."""
+        distributed = _import_distributed()
+        try:
+            return distributed.Client(address, timeout=timeout, security=self.security)
+        except (OSError, TimeoutError) as e:
+            why = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise ValueError(f"cannot reach the Dask scheduler at {address} "
+                             f"(within {timeout:g} s): {why[:200]}") from None
 
     @property
     def client(self):
@@ -382,51 +533,123 @@ class DaskEvaluator(_ChunkedEvaluator):
     def worker_pids(self) -> dict[str, int]:
         return self._client.run(os.getpid)
 
+    # ---- one batch ----
+
     def _run(self, chunks, progress):
-        distributed = _import_distributed()
-        from distributed import KilledWorker
-        client = self._client
-        self._batch += 1
         results: list = [None] * len(chunks)
         attempts = [0] * len(chunks)
-
-        def submit(i):
-            key = f"gpmotion-eval-{self._token}-{self._batch}-{i}-{attempts[i]}"
-            return client.submit(_run_chunk, self.spec, chunks[i], progress, key=key, pure=False)
-
-        futures = {i: submit(i) for i in range(len(chunks))}
-        if self._hook_after_submit is not None:
-            self._hook_after_submit(self)
+        futures: dict = {}
+        self._batch += 1
+        self._idle_said = False
         try:
-            while futures:
-                done = distributed.wait(list(futures.values()), return_when="FIRST_COMPLETED").done
-                for i, f in list(futures.items()):
-                    if f not in done:
-                        continue
-                    if f.status == "finished":
-                        results[i] = f.result()
-                        del futures[i]
-                        continue
-                    exc = f.exception() if f.status == "error" else None
-                    if exc is not None and not isinstance(exc, KilledWorker):
-                        raise exc                      # deterministic failure of the evaluation
-                    attempts[i] += 1                   # killed worker or cancelled: resubmit
-                    self.restarts += 1
-                    if attempts[i] > self.max_retries:
-                        raise WorkerLost(f"chunk {i} lost its worker {attempts[i]} times") from exc
-                    f.release()
-                    futures[i] = submit(i)
+            while any(r is None for r in results):
+                lost = False
+                try:
+                    for i in range(len(chunks)):
+                        if results[i] is None and i not in futures:
+                            futures[i] = self._submit(i, attempts[i], chunks[i], progress)
+                    if self._hook_after_submit is not None:
+                        self._hook_after_submit(self)
+                    lost = self._collect(futures, results, attempts)
+                except TimeoutError:
+                    self._report_idle()
+                except _connection_errors():
+                    lost = True
+                if lost or self._client is None or self._client.status != "running":
+                    futures.clear()
+                    self._await_scheduler()
         finally:
             for f in futures.values():
-                f.cancel()
+                try:
+                    f.cancel()
+                except Exception:                   # the client may be gone: nothing to cancel
+                    pass
         return results
+
+    def _submit(self, i, attempt, chunk, progress):
+        key = f"gpmotion-eval-{self._token}-{self._batch}-{i}-{attempt}"
+        return self._client.submit(_run_chunk, self.spec, chunk, progress, key=key, pure=False)
+
+    def _collect(self, futures, results, attempts) -> bool:
+        """Wait for some futures; store results, resubmit killed ones.  True if the scheduler was lost."""
+        distributed = _import_distributed()
+        from distributed import KilledWorker
+        done = distributed.wait(list(futures.values()), timeout=IDLE_POLL,
+                                return_when="FIRST_COMPLETED").done
+        for i, f in list(futures.items()):
+            if f not in done:
+                continue
+            if f.status == "finished":
+                results[i] = f.result()
+                del futures[i]
+                self._idle_said = False
+            elif f.status == "cancelled":          # the client cancels all when the scheduler goes
+                return True
+            else:
+                exc = f.exception()
+                if not isinstance(exc, KilledWorker):
+                    raise exc                      # deterministic failure of the evaluation
+                attempts[i] += 1
+                self.restarts += 1
+                if attempts[i] > self.max_retries:
+                    raise WorkerLost(f"chunk {i} lost its worker {attempts[i]} times") from exc
+                f.release()
+                del futures[i]                     # resubmitted by the caller
+        return False
+
+    def _report_idle(self):
+        """Say once per batch that no worker is connected (instead of silence)."""
+        try:
+            n = len(self._client.scheduler_info().get("workers", {}))
+        except Exception:
+            return
+        if n == 0 and not self._idle_said:
+            self._idle_said = True
+            _say(f"no Dask workers connected to {self.scheduler}; waiting for workers "
+                 "(Ctrl-C stops; the checkpoint of the last generation is kept)")
+
+    def _await_scheduler(self):
+        """The scheduler is gone: wait ``reconnect_grace`` s for it, re-warm, or raise SchedulerLost."""
+        deadline = time.monotonic() + self.reconnect_grace
+        _say(f"lost the Dask scheduler at {self.scheduler}; waiting up to "
+             f"{self.reconnect_grace:g} s for it to come back")
+        while time.monotonic() < deadline:
+            client = self._client
+            if client is not None and client.status == "running":
+                try:
+                    client.run(_warm_worker, self.spec)
+                    _say(f"reconnected to {self.scheduler}; resubmitting the unfinished chunks")
+                    return
+                except _connection_errors():
+                    pass
+            elif client is None or client.status in ("closed", "closing"):
+                self._reopen(deadline)
+            time.sleep(0.2)
+        raise SchedulerLost(f"lost the Dask scheduler at {self.scheduler} and it did not come back "
+                            f"within {self.reconnect_grace:g} s")
+
+    def _reopen(self, deadline):
+        """The client gave up reconnecting: try a fresh one until the deadline."""
+        if self.scheduler == "local":
+            return
+        old, self._client = self._client, None
+        if old is not None:
+            try:
+                old.close(timeout=1)
+            except Exception:
+                pass
+        try:
+            self._client = self._connect(self.scheduler, max(0.5, min(2.0, deadline - time.monotonic())))
+            self._client._timeout = self.reconnect_grace
+        except ValueError:
+            self._client = None
 
     def close(self):
         client, self._client = getattr(self, "_client", None), None
         cluster, self._cluster = getattr(self, "_cluster", None), None
         if client is not None:
             try:
-                client.close()
+                client.close(timeout=2)
             except Exception:
                 pass
         if cluster is not None:
@@ -436,22 +659,56 @@ class DaskEvaluator(_ChunkedEvaluator):
                 pass
 
 
+def _grace(value) -> float:
+    """Seconds a lost scheduler may take to come back: the argument, $GPMOTION_RECONNECT_GRACE
+    or RECONNECT_GRACE."""
+    name = "reconnect_grace"
+    if value is None:
+        value, name = os.environ.get("GPMOTION_RECONNECT_GRACE", RECONNECT_GRACE), "GPMOTION_RECONNECT_GRACE"
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number of seconds, got {value!r}") from None
+    if not 0 <= value <= 86400:
+        raise ValueError(f"{name} must be between 0 and 86400 seconds, got {value!r}")
+    return value
+
+
+def _connection_errors():
+    """Exceptions that mean 'the scheduler connection is gone', not 'the evaluation failed'."""
+    from concurrent.futures import CancelledError
+
+    from distributed.client import FutureCancelledError
+    from distributed.comm import CommClosedError
+    try:
+        from distributed.client import ClosedClientError
+    except ImportError:                              # pragma: no cover - older distributed
+        ClosedClientError = CommClosedError
+    return (CancelledError, FutureCancelledError, CommClosedError, ClosedClientError, OSError)
+
+
 # ---- choice ------------------------------------------------------------------------
 
 def make_evaluator(task, family, *, workers: int = 0, scheduler: str | None = None, actuation=None,
-                   threads: int | None = None, plugins=(), chunk_size=None):
+                   threads: int | None = None, plugins=None, chunk_size=None, **dask_options):
     """The evaluator for ``--workers`` / ``--scheduler``.
 
     ``scheduler`` given → :class:`DaskEvaluator` (``workers`` = local cluster
-    size, default 2); else ``workers > 1`` → :class:`ProcessPoolEvaluator`;
-    else the in-process evaluator (numba threads; ``threads`` caps them).
+    size, default 2; ``dask_options``: ``tls_ca_file``, ``tls_cert``,
+    ``tls_key``, ``reconnect_grace``, ``timeout``); else ``workers > 1`` →
+    :class:`ProcessPoolEvaluator`; else the in-process evaluator (numba
+    threads; ``threads`` caps them).  ``plugins``: requirement records
+    (default: every plugin loaded in this process).
     """
     workers = _check_workers(workers, minimum=0)
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     if scheduler is not None:
         return DaskEvaluator(task, family, scheduler=scheduler, workers=workers or 2,
-                             actuation=actuation, chunk_size=chunk_size, plugins=plugins)
+                             actuation=actuation, chunk_size=chunk_size, plugins=plugins,
+                             **dask_options)
+    if any(dask_options.get(k) for k in ("tls_ca_file", "tls_cert", "tls_key")):
+        raise ValueError("--tls-* options need a tls:// --scheduler")
     if workers > 1:
         return ProcessPoolEvaluator(task, family, workers, actuation=actuation, chunk_size=chunk_size,
                                     plugins=plugins)

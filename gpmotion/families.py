@@ -161,5 +161,6 @@ FAMILIES = {f.name: f for f in (GPFamily, BSRSenseFamily, BSRTimeFamily)}
 
 def make_family(name: str, task: Task, **options) -> Family:
     if name not in FAMILIES:
-        raise ValueError(f"unknown controller family {name!r}; known: {', '.join(FAMILIES)}")
+        from .names import unknown
+        raise ValueError(unknown("controller family", name, FAMILIES))
     return FAMILIES[name](task, **{k: v for k, v in options.items() if v is not None})

@@ -50,6 +50,17 @@ class Model(NamedTuple):
     sense_lo: np.ndarray    # float64[n_senses] ranges of the normalized view
     sense_hi: np.ndarray
 
+    def __repr__(self) -> str:
+        return _model_repr(self)
+
+
+def _model_repr(m) -> str:
+    """Sizes, not arrays: a Model's full repr is tens of kB."""
+    dims = "3-D" if hasattr(m, "nq") else "planar"
+    return (f"{type(m).__name__}({dims}: {len(m.parent)} links, {len(m.act_dof)} actuators, "
+            f"{len(m.cp_link)} contact points, {len(m.seg_link)} segments, "
+            f"{len(m.sense_lo)} senses, mass {float(m.mass.sum()):.3g} kg)")
+
 
 # ---- 3-D figures (gpmotion.sim.spatial3d) ---------------------------------
 # link types of the 3-D kernel
@@ -100,6 +111,9 @@ class Model3D(NamedTuple):
     sense_hi: np.ndarray
     nq: int
     nv: int
+
+    def __repr__(self) -> str:
+        return _model_repr(self)
 # ---- end 3-D ---------------------------------------------------------------
 
 
@@ -197,6 +211,12 @@ class Figure:
     @property
     def n_act(self) -> int:
         return len(self.model.act_dof)
+
+    def __repr__(self) -> str:        # names and sizes, not the Model's arrays
+        return (f"Figure({self.name!r}, {self.dimensions}-D, {self.root} root, "
+                f"{len(self.body_names)} bodies, {self.n_act} actuated joints, "
+                f"{len(self.contact_names)} contacts, {len(self.site_names)} sites, "
+                f"{len(self.sense_names)} senses, {self.total_mass:.3g} kg)")
 
     def sense_index(self, name: str) -> int:
         try:

@@ -20,18 +20,17 @@ def replay_genome(task, family, actuation, genome):
 def load_controller(path: str | Path):
     """(task, family, actuation, genome, record) from best.json or a run dir.
 
-    Parsed with a whitelist (primitive and terminal names, size caps); a file
-    never runs code.
+    Parsed with a whitelist (primitive and terminal names, size caps).  The
+    file's ``plugins`` are requirements checked against the plugins the user
+    loaded (``--plugins``, entry points): a file never runs code.
     """
     path = Path(path)
     if path.is_dir():
         path = path / "best.json"
     rec = read_json(path, kind="best")
+    from .plugins import require
+    require(rec.get("plugins"), str(path))
     try:
-        if rec.get("plugins"):
-            from .plugins import load_folder
-            for folder in rec["plugins"]:
-                load_folder(folder)
         task = get_task(str(rec["task"]), **dict(rec.get("params", {})))
         family = make_family(str(rec["family"]), task, **dict(rec.get("options", {})))
         genome = family.from_json(rec["genome"])

@@ -44,30 +44,46 @@ class RunConfig:
     @classmethod
     def from_json(cls, d: dict) -> "RunConfig":
         keys = cls.__dataclass_fields__
+        if not isinstance(d, dict):
+            raise ValueError("config.json: no 'run' settings" if d is None else
+                             f"config.json: 'run' must be an object, got {type(d).__name__}")
         missing = [k for k in ("task", "family", "seed") if k not in d]
         if missing:
             raise ValueError(f"config.json lacks {missing}")
+        for k, types in _FIELD_TYPES.items():     # a hand-edited file: one line, not a TypeError
+            if k in d and not (isinstance(d[k], types) and not isinstance(d[k], bool) or
+                               d[k] is None and k in _OPTIONAL):
+                raise ValueError(f"config.json: run.{k} must be {types[0].__name__}, "
+                                 f"got {type(d[k]).__name__}")
         return cls(**{k: d[k] for k in keys if k in d})
+
+
+_FIELD_TYPES = {"task": (str,), "family": (str,), "seed": (int,), "params": (dict,),
+                "family_options": (dict,), "search": (dict,), "actuation": (str,), "workers": (int,),
+                "scheduler": (str,), "threads": (int,), "plugins": (list,)}
+_OPTIONAL = {"actuation", "scheduler", "threads", "plugins"}
 
 
 def build(cfg: RunConfig):
     """Task, family and search (not yet the evaluator) from a config."""
     validate_number("--seed", cfg.seed, lo=0, integer=True)
-    if cfg.plugins:
-        from .plugins import load_folder
-        for folder in cfg.plugins:
-            load_folder(folder)
-    task = get_task(cfg.task, **cfg.params)
-    family = make_family(cfg.family, task, **cfg.family_options)
-    search = make_search(family, cfg.seed, **cfg.search)
+    from .plugins import require          # records to check, never folders to import
+    cfg.plugins = require(cfg.plugins, "the run's plugins (config.json)")
+    try:
+        task = get_task(cfg.task, **cfg.params)
+        family = make_family(cfg.family, task, **cfg.family_options)
+        search = make_search(family, cfg.seed, **cfg.search)
+    except TypeError as e:               # a hand-edited config.json: a value of the wrong type
+        raise ValueError(f"bad run settings ({e})") from None
     actuation = cfg.actuation or family.default_actuation
     return task, family, search, actuation
 
 
-def _evaluator(cfg, task, family, actuation):
+def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
-                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins)
+                          actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
+                          **(backend or {}))
 
 
 class Progress:
@@ -120,18 +136,40 @@ def _trim_log(run: RunDir, evaluations: int):
         atomic_write_text(run.log_path, buf.getvalue())
 
 
-def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: bool = False,
-        quiet: bool = False, artifacts: bool = True, max_generations: int | None = None):
-    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir)."""
+def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = False,
+        resume: bool = False, quiet: bool = False, artifacts: bool = True,
+        max_generations: int | None = None, backend: dict | None = None):
+    """Run (or resume) a search into ``out``; returns (best genome, best cost, run dir).
+
+    ``out`` defaults to ``runs/TASK-FAMILY-seedN`` in the current folder (as `gpmotion run`).
+    ``backend``: this invocation's evaluator settings (``workers``, ``scheduler``,
+    ``security``...); on resume ``workers``/``scheduler`` replace the recorded
+    ones -- every backend gives the same result.
+    """
+    if out is None:
+        if cfg is None:
+            raise ValueError("resume: give the run directory")
+        out = Path("runs") / f"{cfg.task}-{cfg.family}-seed{cfg.seed}"
+    backend = dict(backend or {})
     if resume:
         if not (Path(out) / RunDir.CONFIG).exists():
             raise ValueError(f"{out}: no config.json to resume from")
         rd = RunDir.create(out, resume=True)
-        cfg = RunConfig.from_json(rd.read_config()["run"])
+        cfg = RunConfig.from_json(rd.read_config().get("run"))
+        if "workers" in backend or "scheduler" in backend:
+            cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
         task, family, search, actuation = build(cfg)
-    else:       # validate everything before touching the disk
+        evaluator = None                                    # made once the checkpoint is read
+    else:       # validate everything (the scheduler too) before touching the disk
         task, family, search, actuation = build(cfg)
-        rd = RunDir.create(out, force=force)
+        evaluator = _evaluator(cfg, task, family, actuation, backend)
+        try:
+            rd = RunDir.create(out, force=force)
+        except BaseException:
+            evaluator.close()
+            raise
+        from .plugins import for_record
+        cfg.plugins = for_record(cfg.plugins, rd.path)      # path relative to the run: information
     evals = 0
     elapsed0 = 0.0
     if resume and rd.checkpoint_path.exists():
@@ -139,7 +177,9 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
         try:
             search.load_state_dict(ck["search"])
             evals, elapsed0 = int(ck["evaluations"]), float(ck.get("elapsed_s", 0.0))
-        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as e:
+            if evals > 0 and search.best is None:
+                raise ValueError("no best genome after evaluations")
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as e:
             from .records import FormatError
             raise FormatError(f"{rd.checkpoint_path}: not a valid checkpoint ({e!r:.200})") from None
         _trim_log(rd, evals)
@@ -150,7 +190,8 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
     if not quiet:
         print(f"{'resume' if resume else 'run'} {cfg.task} ({cfg.family}, seed {cfg.seed}"
               f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}", file=sys.stderr)
-    evaluator = _evaluator(cfg, task, family, actuation)
+    if evaluator is None:
+        evaluator = _evaluator(cfg, task, family, actuation, backend)
     prog = Progress(search.total, quiet)
     t0 = time.perf_counter() - elapsed0
     stop = {"flag": False}
@@ -178,6 +219,11 @@ def run(cfg: RunConfig | None, out: str | Path, *, force: bool = False, resume: 
             rd.save_checkpoint({"search": search.state_dict(), "evaluations": evals,
                                 "elapsed_s": el})
             prog.update(search.generation, ev, search.best_cost)
+    except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
+        if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
+            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rd.path}` "
+                          "continues") from None
+        raise
     finally:
         if old is not None:
             signal.signal(signal.SIGINT, old)

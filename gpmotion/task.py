@@ -78,6 +78,8 @@ class Task:
     figure: ClassVar[str] = ""
     description: ClassVar[str] = ""
     params: ClassVar[dict] = {"seconds": 3.0}
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {}   # parameter -> (lo, hi), inclusive
+    param_docs: ClassVar[dict[str, str]] = {}            # parameter -> what it means (units)
     terms: ClassVar[tuple[Term, ...]] = ()
     terminals: ClassVar[tuple[str, ...] | None] = None   # None: every sense of the figure
     controlled: ClassVar[tuple[str, ...] | None] = None  # actuators the controller drives
@@ -91,6 +93,7 @@ class Task:
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
     def __init__(self, **overrides):
+        variant = overrides.pop("figure", None)   # a figure variant: name, TOML path or spec dict
         unknown = set(overrides) - set(self.params)
         if unknown:
             raise ValueError(f"task {self.name}: unknown parameter(s) {sorted(unknown)}; "
@@ -109,10 +112,36 @@ class Task:
         for k in self.curriculum:
             if k not in self.params or isinstance(self.params[k], bool):
                 raise ValueError(f"task {self.name}: curriculum names {k!r}, not a numeric parameter")
+        for k, (lo, hi) in self.bounds.items():
+            if not lo <= float(self.p[k]) <= hi:
+                raise ValueError(f"task {self.name}: parameter {k} must be within {lo:g}..{hi:g}, "
+                                 f"got {self.p[k]:g}")
         if not 0 < float(self.p.get("seconds", 1.0)) <= 120:
             raise ValueError(f"task {self.name}: seconds must be in (0, 120], got {self.p['seconds']}")
         self.validate()
         self.fig: Figure = load_figure(self.figure)
+        if variant is not None:
+            self._use_variant(variant)
+
+    def _use_variant(self, spec) -> None:
+        """Run on a variant of the task's figure; it must have every actuated joint,
+        site, contact and terminal sense the task reads (checked by name)."""
+        fig = load_figure(spec)
+        base = self.fig
+        if (fig.dimensions, fig.root) != (base.dimensions, base.root):
+            raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D with a "
+                             f"{fig.root} root; the task is written for {base.name}, "
+                             f"{base.dimensions}-D with a {base.root} root")
+        needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
+                 ("site", base.site_names, fig.site_names),
+                 ("contact", base.contact_names, fig.contact_names),
+                 ("sense", self.terminals or (), fig.sense_names))
+        missing = [f"{kind} {n!r}" for kind, names, have in needs for n in names if n not in have]
+        if missing:
+            raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "
+                             f"(the task uses them on {base.name})")
+        self.fig, self.figure = fig, fig.name
+        self.p["figure"] = spec
 
     # ---- things a task may override -------------------------------------
     def validate(self) -> None:
@@ -264,5 +293,6 @@ def task_names() -> list[str]:
 def get_task(name: str, **params) -> Task:
     _load_builtin()
     if name not in _TASKS:
-        raise KeyError(f"unknown task {name!r}; known: {', '.join(sorted(_TASKS))}")
+        from .names import unknown
+        raise KeyError(unknown("task", name, _TASKS))
     return _TASKS[name](**params)

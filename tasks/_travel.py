@@ -52,6 +52,11 @@ TRAVEL_PARAMS = {"w_max_height": 0.0, "w_contact_distance": 0.0, "w_rotations": 
 class TravelTask(Task):
     """Travel right: cost = −(com distance + Σ w·secondary term)."""
     params = {"seconds": 3.0, "success_distance": 1.0, **TRAVEL_PARAMS}
+    param_docs = {"seconds": "episode length (s)",
+                  "success_distance": "com travel that counts as solved (m)",
+                  "w_max_height": "weight of the max_height reward (Auslander's Table 3)",
+                  "w_contact_distance": "weight of the contact_distance reward (shuffle)",
+                  "w_rotations": "weight of the rotations reward (cartwheel)"}
     terms = travel_terms(TRAVEL_PARAMS)
     success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
     record_every = 20           # 50 frames/s resolve every gait event these terms use

@@ -40,6 +40,10 @@ class HermanPoint(Task):
     figure = FIGURE
     description = "Herman points the right arm in a direction and holds it"
     params = {"azimuth": -45.0, "elevation": 0.0, "seconds": 1.5}
+    bounds = {"azimuth": (-180.0, 180.0), "elevation": (-90.0, 90.0)}
+    param_docs = {"azimuth": "pointing direction, degrees left of forward",
+                  "elevation": "pointing direction, degrees above horizontal",
+                  "seconds": "episode length (s)"}
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS

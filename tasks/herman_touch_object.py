@@ -31,6 +31,11 @@ class HermanTouchObject(Task):
     description = "Herman touches an object with the right fingertip"
     params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
               "seconds": 1.5}
+    bounds = {"target": (-1, 2)}
+    param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
+                            "2 high across to the left; -1 uses x, y, z",
+                  "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
+                  "z": "object above the pelvis (m)", "seconds": "episode length (s)"}
     controlled = ARM
     terminals = TERMINALS
     gp_defaults = GP_DEFAULTS

@@ -54,6 +54,9 @@ class LampHop(Task):
     goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target point on the floor"
     params = {"distance": 0.4, "seconds": 3.0}
+    bounds = {"distance": (-5.0, 5.0)}
+    param_docs = {"distance": "target x from the start (m; |distance| ≥ 0.05)",
+                  "seconds": "episode length (s)"}
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
 

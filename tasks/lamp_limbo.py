@@ -20,6 +20,9 @@ class LampLimbo(Task):
     goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target, passing under a limbo pole"
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42}   # standing, the lamp is 0.50 m tall
+    bounds = {"distance": (0.1, 5.0), "pole_height": (0.1, 1.0)}
+    param_docs = {"distance": "target x (m); the pole stands halfway",
+                  "pole_height": "height of the pole's underside (m)", "seconds": "episode length (s)"}
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),
     )

@@ -133,6 +133,7 @@ def _fake_evaluator(chunk_size, fail_first=frozenset(), workers=3, max_retries=3
     ev = ProcessPoolEvaluator(_FakeTask(), _FakeFamily(), workers=workers, chunk_size=chunk_size,
                               max_retries=max_retries)
     ev._executor_factory = lambda: ThreadPoolExecutor(max_workers=workers)
+    ev.workers = workers                 # threads here: not capped at this machine's CPUs
     seen = set()
 
     def flaky(spec, genomes_json, progress):
@@ -250,7 +251,8 @@ def test_dask_local_cluster_matches_in_process(task, case):
     with make_evaluator(task, fam, scheduler="local", workers=2, chunk_size=7) as ev:
         assert isinstance(ev, DaskEvaluator)
         addresses = ev.client.scheduler_info()["workers"]
-        assert len(addresses) == 2 and all(a.startswith("tcp://127.0.0.1:") for a in addresses)
+        # loopback only, and TLS with a throwaway certificate: no other local user can submit code
+        assert len(addresses) == 2 and all(a.startswith("tls://127.0.0.1:") for a in addresses)
         assert_identical(ev.evaluate(pop, progress=0.7), ref)
         assert ev.evaluations == N
 

@@ -66,7 +66,7 @@ def test_checkpoint_loader_only_raises_value_errors(family):
         _, fresh = _checkpoint_state(family)
         try:
             fresh.load_state_dict(bad)
-        except (ValueError, KeyError, TypeError, IndexError, AttributeError):
+        except (ValueError, KeyError, TypeError, IndexError, AttributeError, OverflowError):
             pass        # the run loop turns these into one FormatError line (tested below)
 
     check()
@@ -84,3 +84,115 @@ def test_resume_from_a_corrupted_checkpoint_is_one_clear_line(tmp_path, capsys):
     assert main(["resume", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("gpmotion: error:") and "checkpoint" in err and "\n" not in err
+
+
+# ---- whole documents: best.json, config.json, checkpoint.json ----------------------------
+# Every mutation of a real run's files either loads or raises one ValueError line, and no
+# plugin code ever runs (a planted folder would write a marker file if imported).
+
+import shutil  # noqa: E402
+
+from gpmotion.records import read_json  # noqa: E402
+
+MARKER_CODE = "from pathlib import Path\nPath({marker!r}).write_text('ran')\n"
+
+
+@pytest.fixture(scope="module")
+def real_run(tmp_path_factory):
+    from gpmotion.cli import main
+    base = tmp_path_factory.mktemp("docs")
+    out = base / "run"
+    assert main(["run", "lamp_hop", "--controller", "bsr-time", "--out", str(out), "--param",
+                 "seconds=0.3", "--working", "4", "--generations", "2", "--quiet",
+                 "--no-artifacts"]) == 0
+    evil = base / "evil"
+    evil.mkdir()
+    marker = base / "MARKER"
+    (evil / "evil.py").write_text(MARKER_CODE.format(marker=str(marker)))
+    docs = {k: json.loads((out / f"{k}.json").read_text()) for k in ("best", "config", "checkpoint")}
+    return out, evil, marker, docs
+
+
+def _plugin_values(evil):
+    from gpmotion.plugins import folder_digest
+    return st.sampled_from([str(evil), [str(evil)], ["."], [".", str(evil)], [{"name": "evil"}],
+                            [{"name": "evil", "digest": folder_digest(evil)}],
+                            [{"name": "evil", "digest": "0" * 64, "path": str(evil)}], [None], [[]]])
+
+
+def _mutate(doc, values):
+    """A real document with one key at some depth dropped or replaced."""
+    paths = []
+
+    def walk(d, prefix):
+        for k, v in d.items():
+            paths.append(prefix + (k,))
+            if isinstance(v, dict) and len(prefix) < 2:
+                walk(v, prefix + (k,))
+    walk(doc, ())
+
+    def apply(args):
+        path, value, drop = args
+        new = json.loads(json.dumps(doc))
+        d = new
+        for k in path[:-1]:
+            d = d[k]
+        if drop:
+            d.pop(path[-1], None)
+        else:
+            d[path[-1]] = value
+        return new
+    return st.tuples(st.sampled_from(paths), values, st.booleans()).map(apply)
+
+
+def _write(run_dir, dest, kind, doc):
+    if dest.exists():
+        shutil.rmtree(dest)
+    shutil.copytree(run_dir, dest)
+    (dest / f"{kind}.json").write_text(json.dumps(doc))
+    return dest
+
+
+def _one_line(e):
+    """What the CLI prints as one clear line: a ValueError, or a KeyError carrying a sentence
+    (``unknown task 'x'; known: ...``), never a bare key (``error: run``)."""
+    msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
+    assert isinstance(e, (ValueError, KeyError)), f"{type(e).__name__}: {e}"
+    assert isinstance(msg, str) and " " in msg and "\n" not in msg, f"{type(e).__name__}: {msg!r}"
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                   HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_whole_best_json_loads_or_is_one_line_and_runs_no_code(real_run, tmp_path, data):
+    from gpmotion.replay import load_controller
+    out, evil, marker, docs = real_run
+    doc = data.draw(st.one_of(_mutate(docs["best"], st.one_of(json_value, _plugin_values(evil))),
+                              _mutate(docs["best"], _plugin_values(evil)).map(dict)))
+    d = _write(out, tmp_path / "copy", "best", doc)
+    try:
+        load_controller(d)
+    except Exception as e:       # noqa: BLE001 - the assertion names it
+        _one_line(e)
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize("kind", ["config", "checkpoint"])
+def test_whole_config_and_checkpoint_resume_or_are_one_line_and_run_no_code(real_run, tmp_path, kind):
+    from gpmotion.run import run
+    out, evil, marker, docs = real_run
+    values = st.one_of(json_value, _plugin_values(evil))
+
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(doc=_mutate(docs[kind], values))
+    def check(doc):
+        d = _write(out, tmp_path / "copy", kind, doc)
+        (d / "best.json").unlink()
+        try:
+            run(None, d, resume=True, quiet=True, artifacts=False, max_generations=0)
+        except Exception as e:   # noqa: BLE001
+            _one_line(e)
+        assert not marker.exists()
+
+    check()
+    assert read_json(out / "best.json", kind="best")        # the source run is untouched

@@ -29,7 +29,8 @@ def resolve_spec(spec: dict, _seen=()) -> dict:
     if base is None:
         return spec
     if not isinstance(base, str) or base not in _REGISTRY:
-        raise SpecError(f"extends: unknown figure {base!r}; known: {', '.join(figure_names())}")
+        from ..names import unknown
+        raise SpecError(f"extends: {unknown('figure', base, figure_names())}")
     if base in _seen:
         raise SpecError(f"extends: figures extend each other in a loop: {' -> '.join(_seen + (base,))}")
     src = _REGISTRY[base]
@@ -53,7 +54,8 @@ def load_figure(name_or_spec) -> Figure:
     elif key.endswith(".toml") or Path(key).exists():
         fig = compile_spec(resolve_spec(load_spec(key)))
     else:
-        raise SpecError(f"unknown figure {key!r}; known: {', '.join(figure_names())}")
+        from ..names import unknown
+        raise SpecError(unknown("figure", key, figure_names()))
     _CACHE[key] = fig
     return fig
 

@@ -46,6 +46,10 @@ def load_spec(path: str | Path) -> dict:
 
 
 NAMED_LISTS = ("bodies", "joints", "contacts", "sites")
+# keys without which an extending spec's entry cannot be new: a name it does
+# not find in the base is then a typo, not an addition
+_NEW_ENTRY_KEYS = {"bodies": ("mass",), "joints": ("parent", "child"), "contacts": ("body",),
+                   "sites": ("body",)}
 GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent")
 
 
@@ -78,6 +82,8 @@ def merge_spec(base: dict, over: dict) -> dict:
                     raise SpecError(f"{key}: every entry of an extending spec needs a 'name'")
                 if item["name"] in index:
                     merged[index[item["name"]]].update(item)
+                elif any(k not in item for k in _NEW_ENTRY_KEYS[key]):
+                    raise SpecError(_no_such_entry(key, item["name"], index, base))
                 else:
                     index[item["name"]] = len(merged)
                     merged.append(dict(item))
@@ -87,6 +93,14 @@ def merge_spec(base: dict, over: dict) -> dict:
         else:
             out[key] = value
     return out
+
+
+def _no_such_entry(key: str, name: str, known, base: dict) -> str:
+    from ..names import did_you_mean
+    kind = "body" if key == "bodies" else key[:-1]
+    hint = did_you_mean(name, [k for k in known if isinstance(k, str)])
+    return (f"no such {kind} {name!r} in {base.get('name', 'the base figure')}{hint}; a new {kind} "
+            f"needs {' and '.join(repr(k) for k in _NEW_ENTRY_KEYS[key])}")
 
 
 def _num(d, key, where, default=None, lo=None, positive=False):

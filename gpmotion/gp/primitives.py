@@ -137,8 +137,11 @@ def get(name: str) -> Primitive:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise ValueError(f"unknown primitive {name!r}; known: "
-                         f"{', '.join(names()) or '(none loaded)'}") from None
+        from gpmotion.names import did_you_mean
+        raise ValueError(f"unknown primitive {name!r}{did_you_mean(name, names())}; known: "
+                         f"{', '.join(names()) or '(none loaded)'} (a plugin's primitives are "
+                         "known once its folder is loaded: --plugins DIR, or "
+                         "gpmotion.load_plugins(DIR))") from None
 
 
 def names() -> list[str]:

@@ -88,6 +88,15 @@ class Trajectory:
     def n_episodes(self) -> int:
         return self.q.shape[0]
 
+    def __repr__(self) -> str:        # not the arrays (tens of kB)
+        div = int(self.diverged.sum())
+        n = self.n_episodes
+        return (f"Trajectory({self.figure.name!r}, {n} episode{'s' * (n != 1)} × "
+                f"{len(self.times)} frames every {self.dt * self.record_every * 1e3:g} ms, "
+                f"{self.times[-1] if len(self.times) else 0:g} s, q {self.q.shape[2]}"
+                f"{', senses' if self.senses is not None else ''}"
+                f"{f', {div} diverged' if div else ''})")
+
     def episode(self, e: int) -> "Trajectory":
         """A one-episode view (keeps the leading axis)."""
         sl = slice(e, e + 1)
