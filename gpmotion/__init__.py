@@ -41,6 +41,7 @@ from .controller_file import save_controller
 from .run import RunConfig, run     # the function: `gpmotion.run(cfg)`; the module is gpmotion.run's home
 from .sim.rollout import Trajectory, rollout, simulate
 from .task import Ease, Task, Term, get_task, register_task, task_names
+from . import compose  # composite motions: script language, composites, transition search, robust starts
 
 __all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task",
            "task_names", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",

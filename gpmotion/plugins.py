@@ -141,14 +141,14 @@ def load_entry_points() -> list[dict]:
 def activate(folders=()) -> list[dict]:
     """What a command does first: entry points, then the ``--plugins`` folders.
 
-    Returns the requirement records of everything loaded (what a new run records).
+    Returns the requirement records of what this call loaded (what a new run records).
     """
     if isinstance(folders, (str, os.PathLike)):
         folders = [folders]
-    load_entry_points()
-    for f in folders:
-        load_folder(f)
-    return loaded()
+    records = load_entry_points() + [load_folder(f) for f in folders]
+    # this command's plugins only (a long-lived process may have loaded others before)
+    unique = {r["digest"]: r for r in records}
+    return sorted(unique.values(), key=lambda r: (r["name"], r["digest"]))
 
 
 def loaded() -> list[dict]:

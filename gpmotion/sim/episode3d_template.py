@@ -22,7 +22,7 @@ ctrl_control = _ctrl.control
 
 
 @njit(cache=True, error_model="numpy", boundscheck=False, fastmath={{"contract"}})
-def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
+def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0, qd0, contact,
                 ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                 out_pole, out_impact, out_energy, out_targets, out_senses, status):
     nl = M.parent.shape[0]
@@ -60,8 +60,8 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
     presc = np.zeros(nv, dtype=np.int64)
     presc_qdd = np.zeros(nv)
     arm = np.zeros(nv)             # implicit-PD armature per dof (joint_torques → aba_packed)
-    anchor = np.zeros((nc, 2))
-    touching = np.zeros(nc)
+    anchor = contact[:, 0:2].copy()  # friction anchors: carried in and out (composites)
+    touching = contact[:, 2].copy()
     cforce = np.zeros(nc)
     com = np.zeros(6)
     senses = np.zeros(ns)
@@ -130,6 +130,8 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
             status[0] = 1
             status[1] = step
             break
+    contact[:, 0:2] = anchor
+    contact[:, 2] = touching
     # a diverged episode keeps its last good frame for the rest of the record
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
@@ -145,11 +147,11 @@ def run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q
 
 
 @njit(cache=True, parallel=True)
-def rollout_batch(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
+def rollout_batch(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0, qd0, contact,
                   ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                   out_pole, out_impact, out_energy, out_targets, out_senses, status):
     for e in prange(q0.shape[0]):
-        run_episode(M, S, goal, dt, n_steps, every, actuation, default_tau, limit, q0[e], qd0[e],
+        run_episode(M, S, goal, dt, n_steps[e], every, actuation, default_tau, limit, q0[e], qd0[e], contact[e],
                     ci[e], cf[e], cstate[e], record_senses, out_q[e], out_qd[e], out_com[e],
                     out_cforce[e], out_pole[e], out_impact[e], out_energy[e], out_targets[e],
                     out_senses[e], status[e])

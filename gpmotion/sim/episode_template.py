@@ -20,7 +20,7 @@ ctrl_control = _ctrl.control
 
 
 @njit(cache=True, error_model="numpy", boundscheck=False)
-def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
+def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0, contact,
                 ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                 out_pole, out_impact, out_energy, out_targets, out_senses, status):
     nl = q0.shape[0]
@@ -45,8 +45,8 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
     presc = np.zeros(nl, dtype=np.int64)
     presc_qdd = np.zeros(nl)
     arm = np.zeros(nl)             # implicit-PD armature per dof (joint_torques → aba)
-    anchor = np.zeros(nc)
-    touching = np.zeros(nc)
+    anchor = contact[:, 0].copy()    # friction anchors: carried in and out (composites)
+    touching = contact[:, 1].copy()
     cforce = np.zeros(nc)
     com = np.zeros(4)
     senses = np.zeros(ns)
@@ -115,6 +115,8 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
             status[0] = 1
             status[1] = step
             break
+    contact[:, 0] = anchor
+    contact[:, 1] = touching
     # a diverged episode keeps its last good frame for the rest of the record
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
@@ -130,11 +132,11 @@ def run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0
 
 
 @njit(cache=True, parallel=True)
-def rollout_batch(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0,
+def rollout_batch(M, S, dt, n_steps, every, actuation, default_tau, limit, q0, qd0, contact,
                   ci, cf, cstate, record_senses, out_q, out_qd, out_com, out_cforce,
                   out_pole, out_impact, out_energy, out_targets, out_senses, status):
     for e in prange(q0.shape[0]):
-        run_episode(M, S, dt, n_steps, every, actuation, default_tau, limit, q0[e], qd0[e],
+        run_episode(M, S, dt, n_steps[e], every, actuation, default_tau, limit, q0[e], qd0[e], contact[e],
                     ci[e], cf[e], cstate[e], record_senses, out_q[e], out_qd[e], out_com[e],
                     out_cforce[e], out_pole[e], out_impact[e], out_energy[e], out_targets[e],
                     out_senses[e], status[e])

@@ -83,6 +83,7 @@ class Trajectory:
     senses: np.ndarray | None  # [E, F, n_senses] when recorded
     diverged: np.ndarray       # [E] bool
     diverged_step: np.ndarray  # [E] step of divergence or −1
+    contact_end: np.ndarray | None = None   # [E, nc, 2|3] friction anchors at the end (contact0 of a continuation)
 
     @property
     def n_episodes(self) -> int:
@@ -104,7 +105,8 @@ class Trajectory:
                        contact_force=self.contact_force[sl], pole_hit=self.pole_hit[sl],
                        impact=self.impact[sl], energy=self.energy[sl], targets=self.targets[sl],
                        senses=None if self.senses is None else self.senses[sl],
-                       diverged=self.diverged[sl], diverged_step=self.diverged_step[sl])
+                       diverged=self.diverged[sl], diverged_step=self.diverged_step[sl],
+                       contact_end=None if self.contact_end is None else self.contact_end[sl])
 
     @property
     def is3d(self) -> bool:
@@ -175,24 +177,50 @@ def _batch_state(x, n, nq, default, what):
     return np.ascontiguousarray(np.broadcast_to(x, (n, nq)))
 
 
+def _contact_state(x, n, nc, k):
+    """The friction-anchor state [n, nc, k] (anchor x (, y), touching 0/1) a rollout starts from."""
+    if x is None:
+        return np.zeros((n, nc, k))
+    x = np.asarray(x, dtype=np.float64)
+    if x.shape[-2:] != (nc, k) or not np.all(np.isfinite(x)):
+        raise ValueError(f"contact0 must be finite, shaped [..., {nc}, {k}] (a Trajectory's contact_end), "
+                         f"got {x.shape}")
+    return np.array(np.broadcast_to(x, (n, nc, k)), order="C")        # a copy: the kernel writes it
+
+
 def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_steps: int,
-            q0=None, qd0=None, dt: float = 1e-3, record_every: int = 10,
+            q0=None, qd0=None, contact0=None, dt: float = 1e-3, record_every: int = 10,
             actuation: str = "pd", default_tau: float = 0.05, record_senses: bool = False,
             threads: int | None = None) -> Trajectory:
-    """Simulate every episode of ``controller`` for ``n_steps`` steps of ``dt``."""
+    """Simulate every episode of ``controller`` for ``n_steps`` steps of ``dt``.
+
+    The full physical state at the end is (``q[:, -1]``, ``qd[:, -1]``,
+    ``contact_end``); passing them as ``q0``, ``qd0``, ``contact0`` continues
+    the motion exactly (``contact_end`` holds each contact point's friction
+    anchor and touching flag; by default no point starts touching).
+
+    ``n_steps`` may give each episode its own length (a composite's phases):
+    episode e then ends at frame ⌈n_steps[e] / record_every⌉ (its
+    ``contact_end`` is taken there) and its later frames hold that pose with
+    zero velocity and no events, as after a divergence.
+    """
     if actuation not in ACTUATION:
         raise ValueError(f"actuation must be one of {sorted(ACTUATION)}, got {actuation!r}")
     if not (np.isfinite(dt) and 0 < dt <= 0.01):
         raise ValueError(f"dt must be in (0, 0.01] s, got {dt!r}")
-    if n_steps < 1 or record_every < 1:
-        raise ValueError("n_steps and record_every must be >= 1")
-    n_steps = -(-int(n_steps) // record_every) * record_every   # whole frames
     E, nq, nv, m = controller.n_episodes, figure.nq, figure.nv, figure.model
+    steps = np.floor(np.asarray(n_steps, dtype=np.float64))      # as int(n_steps) did
+    if steps.ndim > 1 or steps.size not in (1, E) or not np.all((steps >= 1) & (steps < 2**40)) or record_every < 1:
+        raise ValueError("n_steps (a number, or one per episode) and record_every must be >= 1")
+    steps = -(-steps.astype(np.int64) // record_every) * record_every     # whole frames
+    n_steps = int(steps.max())
+    steps = np.ascontiguousarray(np.broadcast_to(steps, (E,)))
     is3d = isinstance(m, Model3D)
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1
     nc, na, ns = len(m.cp_link), len(m.act_dof), len(m.sense_lo)
+    contact = _contact_state(contact0, E, nc, 3 if is3d else 2)
     out = dict(q=np.zeros((E, F, nq)), qd=np.zeros((E, F, nv)), com=np.zeros((E, F, 6 if is3d else 4)),
                contact_force=np.zeros((E, F, nc)), pole_hit=np.zeros((E, F)),
                impact=np.zeros((E, F)), energy=np.zeros((E, F)), targets=np.zeros((E, F, na)),
@@ -206,8 +234,9 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
-        kernel.rollout_batch(m, scene, *extra, float(dt), n_steps, int(record_every), ACTUATION[actuation],
-                             float(default_tau), DIVERGE_LIMIT, q0, qd0,
+        kernel.rollout_batch(m, scene, *extra, float(dt), steps, int(record_every),
+                             ACTUATION[actuation],
+                             float(default_tau), DIVERGE_LIMIT, q0, qd0, contact,
                              np.ascontiguousarray(controller.ci, dtype=np.int64),
                              np.ascontiguousarray(controller.cf, dtype=np.float64), cstate,
                              bool(record_senses), out["q"], out["qd"], out["com"],
@@ -219,11 +248,12 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     return Trajectory(figure=figure, scene=scene, dt=dt, record_every=record_every,
                       times=np.arange(F) * dt * record_every,
                       senses=senses if record_senses else None,
-                      diverged=status[:, 0].astype(bool), diverged_step=status[:, 1], **out)
+                      diverged=status[:, 0].astype(bool), diverged_step=status[:, 1],
+                      contact_end=contact, **out)
 
 
 def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,
-             q0=None, qd0=None, dt: float = 1e-3, record_every: int = 10,
+             q0=None, qd0=None, contact0=None, dt: float = 1e-3, record_every: int = 10,
              actuation: str = "pd", default_tau: float = 0.05) -> Trajectory:
     """One episode for scripts and tests.
 

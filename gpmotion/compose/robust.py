@@ -1,0 +1,200 @@
+"""Robust ("enhanced") controllers: evaluation from perturbed starts (Auslander et al. §3).
+
+"By randomly perturbing the initial physical configuration of the
+articulated figure during each iteration of the original motion-synthesis
+process, the resulting sense-based motion controller can be made more robust."
+
+* :func:`perturbed_starts` draws K initial states around the nominal one —
+  joint angles, position, orientation, and linear and angular momentum (as
+  velocities) — from a generator seeded by (run seed, round) only, so every
+  evaluator backend and a resumed run draw the same starts, and a new round
+  draws new ones.  A start whose contact points would sink below the nominal
+  start's lowest point is lifted by the difference (no start inside the floor).
+* :func:`robust_rollout` runs N controllers × K starts as one batched rollout
+  (episode ``n·K + k`` is controller n from start k), so K starts cost K
+  episodes of batch, not K separate rollouts.
+* :func:`aggregate` folds the K costs of each controller into one: the mean,
+  or the worst.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..controllers import ControllerBatch
+from ..model import FREE3D, HINGE3D, REVOLUTE, SLIDE_X, SLIDE_Z, Model3D
+from ..sim.rollout import rollout
+from ..task import WORST
+
+AGGREGATES = ("mean", "worst")
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """Standard deviations of the normal perturbations (defaults suit Star-Man-sized figures)."""
+    joint: float = 0.15            # rad, every non-root joint angle (then clipped to its limits)
+    position: float = 0.02         # m, root position (each axis; height only lifts, see module doc)
+    orientation: float = 0.1       # rad, root pitch (3-D: a rotation about a random axis)
+    velocity: float = 0.1          # m/s, root linear velocity (each axis) — linear momentum
+    angular: float = 0.3           # rad/s, root and joint angular rates — angular momentum
+
+    def __post_init__(self):
+        for k, v in asdict(self).items():
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"perturbation {k} must be a finite number >= 0, got {v!r}")
+
+
+def round_rng(seed: int, round_: int) -> np.random.Generator:
+    """The generator of one round's starts: a function of (seed, round) only."""
+    return np.random.default_rng([int(seed), int(round_), 0x0B5A])
+
+
+def perturbed_starts(figure, q0, qd0, k: int, rng: np.random.Generator,
+                     sizes: Perturbation = Perturbation()) -> tuple[np.ndarray, np.ndarray]:
+    """K perturbed initial states (q [K, nq], qd [K, nv]) around (q0, qd0)."""
+    if k < 1:
+        raise ValueError(f"need at least one start, got {k}")
+    q = np.tile(np.asarray(q0, dtype=np.float64), (k, 1))
+    qd = np.tile(np.asarray(qd0, dtype=np.float64), (k, 1))
+    m = figure.model
+    perturb = _perturb3d if isinstance(m, Model3D) else _perturb2d
+    perturb(m, q, qd, rng, sizes)
+    _lift(figure, q, np.asarray(q0, dtype=np.float64))
+    return q, qd
+
+
+def _perturb2d(m, q, qd, rng, s: Perturbation) -> None:
+    k, n = q.shape
+    z = rng.standard_normal((2, k, n))                         # drawn whole: same stream for any sizes
+    slide = (m.jtype == SLIDE_X) | (m.jtype == SLIDE_Z)
+    root_pitch = (m.jtype == REVOLUTE) & np.isin(m.parent, np.flatnonzero(slide))
+    joint = (m.jtype == REVOLUTE) & ~root_pitch
+    q += z[0] * np.where(slide, s.position, np.where(root_pitch, s.orientation, s.joint))
+    qd += z[1] * np.where(slide, s.velocity, s.angular)
+    q[:, joint] = np.clip(q[:, joint], m.lo[joint], m.hi[joint])
+
+
+def _perturb3d(m, q, qd, rng, s: Perturbation) -> None:
+    k = q.shape[0]
+    zq, zv = rng.standard_normal((k, m.nq)), rng.standard_normal((k, m.nv))
+    for link in range(len(m.parent)):
+        a, d = m.qadr[link], m.dadr[link]
+        if m.jtype[link] == FREE3D:
+            q[:, a:a + 3] += s.position * zq[:, a:a + 3]
+            q[:, a + 3:a + 7] = _rotate(q[:, a + 3:a + 7], s.orientation * zq[:, a + 3:a + 6])
+            qd[:, d:d + 3] += s.angular * zv[:, d:d + 3]       # q̇ = (ω_body, v_body)
+            qd[:, d + 3:d + 6] += s.velocity * zv[:, d + 3:d + 6]
+        else:
+            size = s.joint if m.jtype[link] == HINGE3D else s.position
+            q[:, a] = np.clip(q[:, a] + size * zq[:, a], m.lo[d], m.hi[d])
+            qd[:, d] += (s.angular if m.jtype[link] == HINGE3D else s.velocity) * zv[:, d]
+
+
+def _rotate(quat, rotvec):
+    """quat ⊗ exp(rotvec / 2): a body-frame rotation by |rotvec| rad, renormalized."""
+    angle = np.linalg.norm(rotvec, axis=1, keepdims=True)
+    axis = np.where(angle > 0, rotvec / np.where(angle > 0, angle, 1.0), 0.0)
+    w2, v2 = np.cos(angle / 2), axis * np.sin(angle / 2)
+    w1, v1 = quat[:, :1], quat[:, 1:]
+    w = w1 * w2 - np.sum(v1 * v2, axis=1, keepdims=True)
+    v = w1 * v2 + w2 * v1 + np.cross(v1, v2)
+    out = np.concatenate([w, v], axis=1)
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def lowest_contact(figure, q) -> np.ndarray:
+    """Height [K] of the lowest contact point of each configuration q [K, nq]."""
+    m = figure.model
+    if len(m.cp_link) == 0:
+        return np.full(len(q), np.inf)
+    if isinstance(m, Model3D):
+        from ..sim import geometry3d
+        return geometry3d.points_fast(m, q, m.cp_link, m.cp_pos)[..., 2].min(axis=-1)
+    from ..sim import geometry
+    return geometry.points_world(m, geometry.link_poses(m, q), m.cp_link, m.cp_pos)[..., 1].min(axis=-1)
+
+
+def _lift(figure, q, q_nominal) -> None:
+    """Raise starts whose lowest contact point is below the nominal start's (if the root can rise)."""
+    m = figure.model
+    if isinstance(m, Model3D):
+        free = np.flatnonzero(m.jtype == FREE3D)
+        if free.size == 0 or free[0] != 0:
+            return
+        zi = m.qadr[0] + 2
+    else:
+        zs = np.flatnonzero(m.jtype == SLIDE_Z)
+        if zs.size == 0:
+            return
+        zi = zs[0]
+    floor = lowest_contact(figure, q_nominal[None])[0]
+    q[:, zi] += np.maximum(0.0, floor - lowest_contact(figure, q))
+
+
+# ---------------------------------------------------------------- batching
+
+def tile_controllers(batch: ControllerBatch, k: int) -> ControllerBatch:
+    """Each controller row repeated k times (controller-major)."""
+    return batch._replace(ci=np.repeat(batch.ci, k, axis=0), cf=np.repeat(batch.cf, k, axis=0))
+
+
+def robust_rollout(figure, scene, batch: ControllerBatch, q0s, qd0s, **rollout_kw):
+    """N controllers × K starts in one rollout; episode n·K + k = controller n from start k."""
+    q0s, qd0s = np.atleast_2d(q0s), np.atleast_2d(qd0s)
+    k, n = len(q0s), batch.n_episodes
+    if len(qd0s) != k:
+        raise ValueError(f"{k} start configurations but {len(qd0s)} start velocities")
+    return rollout(figure, scene, tile_controllers(batch, k), q0=np.tile(q0s, (n, 1)),
+                   qd0=np.tile(qd0s, (n, 1)), **rollout_kw)
+
+
+def aggregate(costs, k: int, how: str = "mean") -> np.ndarray:
+    """Fold costs [N·K] (lower is better) into one per controller [N]; a non-finite cost counts as WORST."""
+    if how not in AGGREGATES:
+        raise ValueError(f"aggregate must be one of {', '.join(AGGREGATES)}, got {how!r}")
+    c = np.asarray(costs, dtype=np.float64).reshape(-1, k)
+    c = np.where(np.isfinite(c), c, WORST)
+    return c.mean(axis=1) if how == "mean" else c.max(axis=1)
+
+
+def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str = "mean",
+             sizes: Perturbation = Perturbation(), actuation: str | None = None, progress: float = 1.0,
+             threads: int | None = None):
+    """Costs [N] aggregated over K perturbed starts, the success rate [N] and the trajectory [N·K].
+
+    The starts depend on (seed, round_) only: the same for every backend and after a resume.
+    """
+    q0, qd0 = task.initial_state()
+    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, k, round_rng(seed, round_), sizes)
+    traj = robust_rollout(task.fig, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
+                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          actuation=actuation or family.default_actuation, default_tau=family.default_tau,
+                          record_senses=family.needs_senses, threads=threads)
+    costs, _, ok = task.score(traj, progress)
+    return aggregate(costs, k, how), np.asarray(ok, float).reshape(-1, k).mean(axis=1), traj
+
+
+def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int = 0,
+               sizes: Perturbation = Perturbation(), threads: int | None = None) -> dict:
+    """Success rate and cost spread of one controller over ``trials`` perturbed starts.
+
+    Trial 0 is the nominal start (so the table also says how the controller
+    does as evolved); the other trials are drawn from ``round_rng(seed, 0)``.
+    """
+    if not 1 <= trials <= 100_000:
+        raise ValueError(f"trials must be in 1..100000, got {trials}")
+    q0, qd0 = task.initial_state()
+    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, trials, round_rng(seed, 0), sizes)
+    q0s[0], qd0s[0] = q0, qd0
+    traj = robust_rollout(task.fig, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
+                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          actuation=actuation, default_tau=family.default_tau,
+                          record_senses=family.needs_senses, threads=threads)
+    costs, _, ok = task.score(traj, 1.0)
+    costs, ok = np.asarray(costs, float), np.asarray(ok, bool)
+    q = np.percentile(costs, [0, 25, 50, 75, 100])
+    return {"trials": trials, "seed": seed, "success_rate": float(ok.mean()), "nominal_success": bool(ok[0]),
+            "nominal_cost": float(costs[0]), "cost_min": q[0], "cost_q25": q[1], "cost_median": q[2],
+            "cost_q75": q[3], "cost_max": q[4], "diverged": int(traj.diverged.sum()),
+            "sizes": asdict(sizes), "costs": costs.tolist(), "success": ok.tolist()}

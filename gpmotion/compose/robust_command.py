@@ -1,0 +1,79 @@
+"""``gpmotion robustness RUN [--trials 100]``: how a controller does from perturbed starts.
+
+Until cli.py registers it: ``python -m gpmotion.compose.robust_command RUN``.
+To register: ``add_arguments(sub.add_parser("robustness", help=HELP))`` and
+``COMMANDS["robustness"] = run_command``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+HELP = "success rate and cost spread of a controller from randomly perturbed starts"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", help="run directory or controller JSON (best.json)")
+    p.add_argument("--trials", type=int, default=100, help="perturbed starts (default 100; trial 0 is nominal)")
+    p.add_argument("--seed", type=int, default=0)
+    for name, default, unit in (("joint", 0.15, "rad"), ("position", 0.02, "m"), ("orientation", 0.1, "rad"),
+                                ("velocity", 0.1, "m/s"), ("angular", 0.3, "rad/s")):
+        p.add_argument(f"--{name}", type=float, default=default, help=f"σ of the {name} perturbation ({unit}, default {default})")
+    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    p.add_argument("--plot", metavar="PNG", help="also draw the cost of every trial, successes marked")
+
+
+def run_command(args) -> int:
+    from ..replay import load_controller
+    from .robust import Perturbation, robustness
+    task, family, actuation, genome, _ = load_controller(args.source)
+    sizes = Perturbation(args.joint, args.position, args.orientation, args.velocity, args.angular)
+    r = robustness(task, family, actuation, genome, trials=args.trials, seed=args.seed, sizes=sizes)
+    if args.json:
+        print(json.dumps(r))
+    else:
+        print(f"{args.source}: {task.name}, {family.name}, {r['trials']} starts (seed {r['seed']})")
+        print("| success | nominal | cost min | q25 | median | q75 | max | diverged |")
+        print("|---|---|---|---|---|---|---|---|")
+        print(f"| {100 * r['success_rate']:.0f}% | {'ok' if r['nominal_success'] else 'fails'} "
+              f"({r['nominal_cost']:.3f}) | {r['cost_min']:.3f} | {r['cost_q25']:.3f} | {r['cost_median']:.3f} | "
+              f"{r['cost_q75']:.3f} | {r['cost_max']:.3f} | {r['diverged']} |")
+    if args.plot:
+        _plot(args.plot, r, f"{task.name} ({family.name}): {100 * r['success_rate']:.0f}% of {r['trials']} starts succeed")
+    return 0
+
+
+def _plot(path, r, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from ..records import atomic_output
+    costs, ok = np.asarray(r["costs"]), np.asarray(r["success"])
+    order = np.argsort(costs)
+    fig, ax = plt.subplots(figsize=(7, 3))
+    ax.bar(np.arange(len(costs)), costs[order], color=np.where(ok[order], "tab:green", "tab:red"))
+    ax.set_xlabel("perturbed start (sorted by cost)")
+    ax.set_ylabel("cost (lower is better)")
+    ax.set_title(title + " — green: success", fontsize=9)
+    fig.tight_layout()
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="gpmotion robustness", description=HELP)
+    add_arguments(ap)
+    args = ap.parse_args(argv)
+    try:
+        return run_command(args)
+    except (ValueError, OSError) as e:
+        print(f"gpmotion: error: {(str(e).splitlines() or ['?'])[0]}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
