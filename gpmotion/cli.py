@@ -161,6 +161,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
     p.add_argument("--out", help="output folder (default runs/compare-TASK)")
     _add_plugins_arg(p)
+    p.add_argument("--force", action="store_true", help="overwrite a non-empty --out folder")
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
@@ -465,7 +466,8 @@ def cmd_compare(args):
     _activate_plugins(args)
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
                        params=_params(args.param), population=population,
-                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
+                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
+                       force=args.force)
     print(md)
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
 

@@ -1,11 +1,22 @@
 """GP vs BSR on one task, one actuation and one evaluation budget.
 
-Each family runs K seeds; every run gets the same number of evaluations.
-The table reports the final best controller re-scored with every style term
-at full weight (progress 1), the success rate against the task's threshold,
-the evaluations needed to first reach it, and wall time; the plot shows
-best-so-far against evaluations (median and quartile band per family), like
-Auslander et al.'s Figs. 7–8.
+Each family runs K seeds; every run gets the same evaluation budget (a
+serial search's re-scores of its working set when style terms phase in are
+evaluations too, and come out of the budget).  The table reports each run's
+best controller under the final scoring (every style term at full weight,
+progress 1), replayed; the success rate against the task's threshold; the
+evaluations needed to first reach it; and wall time.  The plot shows the
+same scoring against evaluations: each run's best so far under the final
+weights (monotone; median and quartile band per family, like Auslander et
+al.'s Figs. 7–8), so it ends at the table's numbers; the progress window in
+which style terms phase in is shaded.  Under a curriculum (the scene eases
+in), the final scoring is only known for evaluations made in the final
+scene, so the curves start there (the figure says so).
+
+Written to the output folder: compare.md / compare.csv (the table),
+runs.json (every run, with its curves), curves.csv (the plotted medians and
+quartiles), curves.png, and best/FAMILY-seedK.json, each run's best
+controller as a ``best.json``-style file (``gpmotion replay`` reads it).
 """
 from __future__ import annotations
 
@@ -20,43 +31,59 @@ import numpy as np
 
 from .evaluators import make_evaluator
 from .families import make_family
-from .records import atomic_write_json, atomic_write_text
+from .plugins import loaded as loaded_plugins
+from .records import atomic_write_json, atomic_write_text, envelope
 from .replay import replay_genome
-from .search.adapters import make_search
+from .search.adapters import make_search, serial_generations
 from .task import get_task
 
 
-def _search_opts(family: str, budget: int, population: int):
+def _search_opts(family: str, budget: int, population: int, task=None):
     if family == "gp":
         pop = min(population, budget)
         return {"population": pop, "generations": max(1, budget // pop - 1)}
-    return {"n_working": 10, "n_generations": max(1, budget // 10 - 1)}
+    gens = max(1, budget // 10 - 1) if task is None else serial_generations(task, budget, 10)
+    return {"n_working": 10, "n_generations": gens}
+
+
+def _nan(x):
+    return float("nan") if x is None else float(x)
 
 
 def run_one(task, family_name, seed, budget, actuation, population, workers=0, scheduler=None,
             family_options=None):
     """One search; returns a dict with the curve and the final numbers."""
     fam = make_family(family_name, task, **(family_options or {}).get(family_name, {}))
-    search = make_search(fam, seed, **_search_opts(family_name, budget, population))
+    search = make_search(fam, seed, **_search_opts(family_name, budget, population, task))
     ev = make_evaluator(task, fam, workers=workers, scheduler=scheduler, actuation=actuation)
-    evals, curve, first_success = 0, [], None
+    evals, curve, current, progress, first_success = 0, [], [], [], None
     t0 = time.perf_counter()
     try:
         while not search.done and evals < budget:
             genomes = search.ask()
-            result = ev.evaluate(genomes, search.progress)
+            p = search.progress
+            result = ev.evaluate(genomes, p)
             search.tell(result)
             evals += len(genomes)
-            curve.append((evals, search.best_cost))
+            curve.append((evals, search.best_final))        # final scoring (None: unknown)
+            current.append((evals, search.best_so_far))
+            progress.append((evals, p))
             if first_success is None and result.success.any():
                 first_success = evals
     finally:
         ev.close()
     wall = time.perf_counter() - t0
-    _, costs, _, ok = replay_genome(task, fam, actuation, search.best)
+    traj, costs, measures, ok = replay_genome(task, fam, actuation, search.best)
+    controller = envelope("best", {
+        "task": task.name, "params": dict(task.p), "family": fam.name,
+        "options": dict(fam.options), "actuation": actuation, "plugins": loaded_plugins(),
+        "genome": fam.to_json(search.best), "cost": float(costs[0]), "seed": seed,
+        "terms": task.breakdown(measures, 0, 1.0), "final_cost": float(costs[0]),
+        "success": bool(ok[0]), "facts": task.describe(traj, measures)})
     return {"family": family_name, "seed": seed, "evaluations": evals, "final_cost": float(costs[0]),
             "success": bool(ok[0]), "first_success": first_success, "wall_s": wall,
-            "curve": curve}
+            "curve": curve, "curve_current": current, "progress": progress,
+            "controller": controller}
 
 
 def summarize(runs: list[dict]) -> list[dict]:
@@ -85,14 +112,15 @@ def table_markdown(rows) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _bands(runs, budget):
+def _bands(runs, budget, key="curve"):
+    """Per family: (grid, q25, median, q75) of the runs' step curves ``key``."""
     grid = np.linspace(0, budget, 60)[1:]
     series = {}
     for fam in dict.fromkeys(r["family"] for r in runs):
         ys = []
         for r in (r for r in runs if r["family"] == fam):
-            e = np.array([p[0] for p in r["curve"]])
-            b = np.array([p[1] for p in r["curve"]])
+            e = np.array([p[0] for p in r[key]], dtype=np.float64)
+            b = np.array([_nan(p[1]) for p in r[key]])
             idx = np.searchsorted(e, grid, side="right") - 1
             ys.append(np.where(idx >= 0, b[np.clip(idx, 0, None)], np.nan))
         y = np.array(ys)
@@ -102,22 +130,118 @@ def _bands(runs, budget):
     return series
 
 
-def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", params=None,
-            population=100, workers=0, scheduler=None, family_options=None, quiet=False):
-    from . import render
-    task = get_task(task_name, **(params or {}))
+def phase_window(task) -> tuple[float, float] | None:
+    """Progress (a, b) from the first style term (or curriculum) starting to
+    phase in to the last reaching full weight; None if nothing is phased."""
+    spans = [t.phase for t in task.terms if t.weight != 0 and t.phase[1] > t.phase[0]]
+    spans += [e.phase for e in task.curriculum.values() if e.phase[1] > e.phase[0]]
+    if not spans:
+        return None
+    return min(a for a, _ in spans), max(b for _, b in spans)
+
+
+def _evals_at(run, progress: float, strict: bool) -> float:
+    """Evaluations made when the run's progress first passed (or reached) ``progress``."""
+    for e, p in run["progress"]:
+        if p > progress or (not strict and p >= progress):
+            return float(e)
+    return float(run["evaluations"])
+
+
+def _window_evals(runs, window):
+    """The phase-in window in evaluations: earliest start, latest end over runs."""
+    if window is None:
+        return None
+    a, b = window
+    return (min(_evals_at(r, a, True) for r in runs), max(_evals_at(r, b, False) for r in runs))
+
+
+def _curves_csv(series) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["controller", "evaluations", "q25", "median", "q75"])
+    for fam, (x, q25, q50, q75) in series.items():
+        for row in zip(x, q25, q50, q75):
+            w.writerow([fam, *(repr(float(v)) for v in row)])
+    return buf.getvalue()
+
+
+def plot_curves(path, series, task, window, window_evals, actuation):
+    """Best so far under the final scoring, median and quartile band per family."""
+    from matplotlib.figure import Figure
+
+    from .render import _save_png
+    fig = Figure(figsize=(6.5, 4))
+    ax = fig.add_subplot()
+    if window_evals is not None:
+        lo, hi = window_evals
+        ax.axvspan(lo, hi, color="0.5", alpha=0.15, lw=0,
+                   label=f"style terms phase in (progress {window[0]:g}–{window[1]:g})")
+    for name, (x, q25, q50, q75) in series.items():
+        (line,) = ax.plot(x, q50, lw=1.6, drawstyle="steps-post", label=str(name))
+        ax.fill_between(x, q25, q75, color=line.get_color(), alpha=0.25, lw=0, step="post")
+    ax.set_xlabel("evaluations")
+    ys = np.concatenate([np.asarray(v[1:], float).ravel() for v in series.values()])
+    ys = ys[np.isfinite(ys)]
+    log = ys.size and ys.min() > 0 and ys.max() > 20 * ys.min()   # families far apart
+    if log:
+        ax.set_yscale("log")
+    ax.set_ylabel("best cost so far, final weights\n(lower is better" + (", log scale)" if log else ")"))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{task.name}: GP vs BSR ({actuation})")
+    if task.curriculum:
+        ax.text(0.01, 0.01, "curriculum: earlier evaluations ran in an easier scene, so the\n"
+                "final-weight cost is known only once the final scene is reached",
+                transform=ax.transAxes, fontsize=7, va="bottom")
+    fig.set_layout_engine("constrained")
+    _save_png(fig, path, 120)
+
+
+def check_out_dir(out, force: bool) -> Path:
+    """The output folder; an existing non-empty one only with ``force``."""
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: exists and is not a folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ValueError(f"--out {out}: folder exists and is not empty; "
+                         "use --force to overwrite it")
     out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def aggregate_lines(runs) -> list[str]:
+    """One line per family over its seeds: median and range, solved, best seed."""
+    lines = []
+    for fam in dict.fromkeys(r["family"] for r in runs):
+        rs = [r for r in runs if r["family"] == fam]
+        c = np.array([r["final_cost"] for r in rs])
+        best = rs[int(np.argmin(c))]
+        lines.append(f"{fam:<10} {len(rs)} seeds: cost median {np.median(c):.3f} "
+                     f"(min {c.min():.3f}, max {c.max():.3f}), solved "
+                     f"{sum(r['success'] for r in rs)}/{len(rs)}, best seed {best['seed']}")
+    return lines
+
+
+def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", params=None,
+            population=100, workers=0, scheduler=None, family_options=None, quiet=False,
+            force=False):
+    task = get_task(task_name, **(params or {}))
+    out = check_out_dir(out, force)
+    (out / "best").mkdir(exist_ok=True)
     runs = []
     for fam in controllers:
         for seed in range(seeds):
             r = run_one(task, fam, seed, budget, actuation, population, workers, scheduler,
                         family_options)
             runs.append(r)
+            atomic_write_json(out / "best" / f"{fam}-seed{seed}.json", r.pop("controller"))
             if not quiet:
                 print(f"{fam:<10} seed {seed}: cost {r['final_cost']:.3f} "
                       f"{'solved' if r['success'] else 'not solved'} in {r['wall_s']:.1f}s",
                       file=sys.stderr, flush=True)
+    if not quiet and seeds > 1:
+        print("\n".join(aggregate_lines(runs)), file=sys.stderr, flush=True)
     rows = summarize(runs)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
@@ -129,7 +253,23 @@ def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", param
     atomic_write_text(out / "compare.md", md)
     atomic_write_json(out / "runs.json", {"task": task.name, "params": task.p, "actuation": actuation,
                                           "budget": budget, "runs": runs})
-    render.curves_band(out / "curves.png", _bands(runs, budget), xlabel="evaluations",
-                       ylabel="best cost so far (lower is better)",
-                       title=f"{task.name}: GP vs BSR ({actuation})")
+    write_curves(out, task, runs, budget, actuation)
     return rows, md
+
+
+def write_curves(out, task, runs, budget, actuation):
+    """curves.csv and curves.png of ``runs`` (as in runs.json)."""
+    series = _bands(runs, budget)
+    atomic_write_text(Path(out) / "curves.csv", _curves_csv(series))
+    window = phase_window(task)
+    plot_curves(Path(out) / "curves.png", series, task, window, _window_evals(runs, window),
+                actuation)
+
+
+def replot(out) -> Path:
+    """Redraw a compare folder's curves from its runs.json (no search is run)."""
+    import json
+    d = json.loads((Path(out) / "runs.json").read_text())
+    task = get_task(d["task"], **d["params"])
+    write_curves(out, task, d["runs"], int(d["budget"]), d["actuation"])
+    return Path(out) / "curves.png"

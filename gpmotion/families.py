@@ -105,24 +105,30 @@ class BSRFamily(Family):
     # Table 2's τ range is [2Δt, T/4]; Δt here is the controller tick.  At
     # 50 ms, τ ≥ 0.1 s: kinematic joints have unlimited torque, and the paper
     # (footnote 2) restricts τ to ranges that give acceptable behaviour.
+    # Like GP, a rule drives only the task's controlled actuators (θ₀ has one
+    # column per driven joint); the others hold the neutral pose with the
+    # rollout's default τ, exactly as under a GP controller.
     def __init__(self, task: Task, rules=None, bsr_dt=0.05, **options):
         super().__init__(task, rules=rules, bsr_dt=bsr_dt, **options)
-        self.limits = task.fig.actuator_limits()
+        self.actuators = task.controlled_actuators()
+        self.limits = task.fig.actuator_limits()[self.actuators]
         if not np.all(np.isfinite(self.limits)):
-            raise ValueError(f"BSR needs finite joint limits on every actuator of {task.figure}")
+            raise ValueError(f"BSR needs finite joint limits on every driven actuator of {task.figure}")
         self.bsr_dt = min(float(bsr_dt), task.seconds / 8)   # short episodes keep a τ range
 
     def encode(self, genomes):
-        return bsr_genome.encode_batch(list(genomes), self.sense_indices, self.task.fig.n_act)
+        return bsr_genome.encode_batch(list(genomes), self.sense_indices, len(self.actuators),
+                                       self.actuators)
 
     def to_json(self, genome):
         return genome.to_dict()
 
     def from_json(self, data):
         g = bsr_genome.genome_from_dict(data)
-        if g.kind != self.kind or g.n_act != self.task.fig.n_act:
+        if g.kind != self.kind or g.n_act != len(self.actuators):
             raise ValueError(f"controller is a {g.kind}-based BSR for {g.n_act} joints; "
-                             f"expected {self.kind}-based for {self.task.fig.n_act}")
+                             f"expected {self.kind}-based for the {len(self.actuators)} "
+                             f"joints {self.task.name} drives")
         return g
 
     def mutate(self, genome, rng, extra=None):

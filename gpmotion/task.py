@@ -222,15 +222,27 @@ class Task:
     def score(self, traj, progress: float = 1.0):
         """(total cost per episode, {term: value}, success per episode)."""
         measures = self.measure(traj)
-        total = np.zeros(traj.n_episodes)
+        raw = self._weighted_sum(measures, traj.n_episodes, progress)
+        bad = traj.diverged | ~np.isfinite(raw)
+        ok = self.success(traj, measures) & ~bad
+        return self.cost(measures, traj.diverged, progress), measures, ok
+
+    def _weighted_sum(self, measures, n: int, progress: float) -> np.ndarray:
+        total = np.zeros(n)
         for term in self.terms:
             v = np.asarray(measures[term.name], dtype=np.float64)
             total += term.weight * term.factor(progress) * np.nan_to_num(v, nan=WORST, posinf=WORST)
-        bad = traj.diverged | ~np.isfinite(total)
+        return total
+
+    def cost(self, measures, diverged, progress: float = 1.0) -> np.ndarray:
+        """Total cost per episode from raw term values at run progress (what
+        ``score`` returns); valid under another progress's weights only while
+        the scene is the same (``staged`` equal), since measures depend on it."""
+        diverged = np.asarray(diverged, dtype=bool)
+        total = self._weighted_sum(measures, diverged.shape[0], progress)
+        bad = diverged | ~np.isfinite(total)
         total[bad] = WORST
-        total = np.clip(total, -WORST, WORST)      # statistics over a population stay finite
-        ok = self.success(traj, measures) & ~bad
-        return total, measures, ok
+        return np.clip(total, -WORST, WORST)      # statistics over a population stay finite
 
     def breakdown(self, measures, e: int, progress: float = 1.0) -> list[dict]:
         """Per-term rows for one episode: value, weight, phase factor, contribution."""

@@ -165,7 +165,7 @@ def test_encode_batch_pads_and_checks():
     rng = np.random.default_rng(0)
     gs = [G.random_sense_genome(rng, R, 3, LIMITS3, 0.01, 2.0) for R in (2, 5)]
     b = G.encode_batch(gs, [4, 0, 2], 3)
-    assert b.ci.shape == (2, 6) and b.ci.dtype == np.int64 and b.cf.dtype == np.float64
+    assert b.ci.shape == (2, 9) and b.ci.dtype == np.int64 and b.cf.dtype == np.float64
     assert b.cf.shape[1] == 5 * (2 + 6 + 3) and np.all(b.cf[0, 2 * 11:] == 0)
     assert Path(b.module).is_absolute() and b.module.endswith("sense_kernel.py")
     with pytest.raises(ValueError, match="sense_indices"):

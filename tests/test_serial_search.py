@@ -136,3 +136,66 @@ def test_sense_genomes_with_relevance_trajectories():
             s2.load_state_dict(state)
             assert all(np.array_equal(a, b) for a, b in zip(s.extras, s2.extras))
     assert s.history[-1][1] > s.history[0][1]
+
+
+# -- phases: scores under phased-in terms go stale (issue 12, defect 1) ------
+
+STYLE = np.array([1.0, 0.0, 0.0])
+
+
+def phased_score(g, phase):
+    """Phase 0: toy_score; phase 1 adds a style penalty that most controllers pay."""
+    return toy_score(g) - phase[0] * 20.0 * float(np.sum((g.theta0[:, :1] - STYLE[0]) ** 2))
+
+
+def run_phased(search, until=None):
+    while not search.done and (until is None or search.generation < until):
+        phase = search.current_phase()        # the round the candidates are scored in
+        cands = search.ask()
+        search.tell([phased_score(g, phase) for g in cands])
+    return search
+
+
+def make_phased(seed, **kw):
+    return make(seed, phase_fn=lambda gen: (0.0 if gen < 40 else 1.0,), **kw)
+
+
+def test_phase_change_rescores_working_set_and_best():
+    s = run_phased(make_phased(3))
+    final = (1.0,)
+    # every stored score, and the best, is a score of the final phase
+    assert [phased_score(g, final) for g in s.working] == list(s.scores)
+    assert phased_score(s.best_genome, final) == s.best_score
+    assert s.best_score >= max(s.scores)
+    # one re-score of C + 1 candidates, counted as evaluations
+    assert s.evaluations == 6 * 121 + 7
+    assert [e for e, _ in s.history][40:42] == [6 * 41, 6 * 41 + 7]
+    # no re-score without a phase change, none without phase_fn
+    assert run(make(3)).evaluations == 6 * 121
+
+
+def test_rescore_draws_no_random_numbers_and_keeps_best_when_not_beaten():
+    s = make_phased(3)
+    run_phased(s, until=40)
+    rng_state = s.rng.bit_generator.state
+    best = s.best_genome.to_dict()
+    cands = s.ask()
+    assert s.rescoring and len(cands) == 7 and s.rng.bit_generator.state == rng_state
+    s.tell([-1e3] * 6 + [-5.0])                      # the incumbent stays the best
+    assert s.best_genome.to_dict() == best and s.best_score == -5.0
+    assert not s.rescoring and list(s.scores) == [-1e3] * 6
+
+
+@pytest.mark.parametrize("stop_between_ask_and_tell", [False, True])
+def test_resume_across_a_rescore_is_exact(stop_between_ask_and_tell):
+    full = run_phased(make_phased(5))
+    part = run_phased(make_phased(5), until=40)
+    if stop_between_ask_and_tell:
+        part.ask()
+        assert part.rescoring
+    state = json.loads(json.dumps(part.state_dict(), allow_nan=False))
+    resumed = make_phased(6)
+    resumed.load_state_dict(state)
+    run_phased(resumed)
+    assert resumed.history == full.history
+    assert resumed.best_genome.to_dict() == full.best_genome.to_dict()

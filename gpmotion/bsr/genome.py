@@ -320,14 +320,16 @@ def random_time_genome(rng: np.random.Generator, n_rules: int, limits,
     return TimeGenome(theta0, tau, t_per, limits, np.array([lo, hi]), durations)
 
 
-def encode_batch(genomes, sense_indices=None, n_act: int | None = None
-                 ) -> ControllerBatch:
+def encode_batch(genomes, sense_indices=None, n_act: int | None = None,
+                 actuators=None) -> ControllerBatch:
     """Program arrays for one batched rollout (layouts: the kernel modules).
 
     ``sense_indices`` (int[V]) says which entries of ``senses_norm`` a
     sense-based genome's V stimulus columns read; it is ignored for
-    time-based genomes.  ``n_act`` (the figure's actuator count) must equal
-    every genome's θ₀ width.
+    time-based genomes.  ``n_act`` (the number of driven actuators) must
+    equal every genome's θ₀ width.  ``actuators`` (int[n_act], default
+    0..n_act−1) are the figure actuators the θ₀ columns drive (a task's
+    ``controlled_actuators``); the others hold their neutral pose, as GP's.
     """
     genomes = list(genomes)
     if not genomes:
@@ -340,6 +342,10 @@ def encode_batch(genomes, sense_indices=None, n_act: int | None = None
         raise ValueError(f"encode_batch: genome joint counts {sorted(widths)} "
                          f"do not match n_act={n_act}")
     n_act = widths.pop()
+    amap = np.arange(n_act) if actuators is None else np.asarray(actuators, dtype=np.int64).ravel()
+    if amap.size != n_act or np.any(amap < 0) or np.unique(amap).size != n_act:
+        raise ValueError(f"encode_batch: actuators must be {n_act} distinct "
+                         f"non-negative indices, got {amap.tolist()}")
     rows_i, rows_f = [], []
     if kinds == {"sense"}:
         from gpmotion.bsr.sense_kernel import CSTATE_SIZE
@@ -353,14 +359,14 @@ def encode_batch(genomes, sense_indices=None, n_act: int | None = None
             if g.n_senses != idx.size:
                 raise ValueError(f"encode_batch: genome reads {g.n_senses} "
                                  f"senses but {idx.size} sense_indices given")
-            rows_i.append(np.concatenate([[g.n_rules, idx.size, n_act], idx]))
+            rows_i.append(np.concatenate([[g.n_rules, idx.size, n_act], idx, amap]))
             rows_f.append(np.hstack([g.weights()[:, None], g.tau[:, None],
                                      g.mu, g.lam, g.theta0]).ravel())
         module, cstate_size = SENSE_KERNEL, CSTATE_SIZE
     else:
         from gpmotion.bsr.time_kernel import CSTATE_SIZE
         for g in genomes:
-            rows_i.append(np.array([g.n_rules, n_act, g.durations is not None]))
+            rows_i.append(np.concatenate([[g.n_rules, n_act, g.durations is not None], amap]))
             rows_f.append(np.concatenate(
                 [[g.t_per], np.hstack([g.tau[:, None], g.theta0]).ravel(), g.boundaries()]))
         module, cstate_size = TIME_KERNEL, CSTATE_SIZE

@@ -29,7 +29,9 @@ episode keeps rule 0 without scoring; every later call scores the senses it
 is given (the senses at the end of the previous step, as in Fig. 2).
 
 Program layout (see ``encode_batch``)
-  ci = [R, V, n_act, sense_index_0 .. sense_index_{V-1}]
+  ci = [R, V, n_act, sense_index_0 .. sense_index_{V-1},
+        actuator_0 .. actuator_{n_act-1}]   (figure actuator of θ₀ column i;
+        the figure's other actuators keep the rollout's neutral target and τ)
   cf = R blocks of [W, τ, μ_0..μ_{V-1}, λ_0..λ_{V-1}, θ₀_0..θ₀_{n_act-1}]
   cstate = [active rule, steps taken]        (CSTATE_SIZE = 2)
 ``control`` allocates nothing: it runs every simulation step.
@@ -89,6 +91,8 @@ def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     base = active * stride
     tau = cf[base + 1]
     pose = base + CF_RULE_HEADER + 2 * n_senses
+    amap = CI_HEADER + n_senses
     for i in range(n_act):
-        targets[i] = cf[pose + i]
-        taus[i] = tau
+        a = ci[amap + i]
+        targets[a] = cf[pose + i]
+        taus[a] = tau

@@ -22,7 +22,9 @@ while the phase fraction (t mod t_per)/t_per lies in [b_{r−1}, b_r) with
 b_{−1} = 0, b_{R−1} = 1.
 
 Program layout (see ``encode_batch``)
-  ci = [R, n_act, variable (0/1)]
+  ci = [R, n_act, variable (0/1), actuator_0 .. actuator_{n_act-1}]
+        (actuator_i: the figure actuator of θ₀ column i; the figure's other
+        actuators keep the rollout's neutral target and τ)
   cf = [t_per, then R blocks of [τ, θ₀_0 .. θ₀_{n_act-1}],
         then (variable) the R − 1 inner boundaries b_0 < .. < b_{R−2}]
   cstate = [active rule]                      (CSTATE_SIZE = 1)
@@ -75,5 +77,6 @@ def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     base = 1 + r * (n_act + 1)
     tau = cf[base]
     for i in range(n_act):
-        targets[i] = cf[base + 1 + i]
-        taus[i] = tau
+        a = ci[3 + i]
+        targets[a] = cf[base + 1 + i]
+        taus[a] = tau

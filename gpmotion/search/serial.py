@@ -17,7 +17,18 @@ Decisions, all stated once here:
 * reseeding, with h = C // 2 and a stable rank order (ties by position):
   the k-th best (k < h) is copied over the k-th of the bottom h, score and
   extras included; with odd C the middle controller stays;
-* the best-so-far is updated on strict improvement only.
+* the best-so-far is updated on strict improvement only;
+* phases: a score may depend on the round it was made in (style terms
+  phased in over the run).  ``phase_fn(generation)`` names that phase (any
+  JSON-able tuple; None: scores never go stale).  When the phase of the
+  next round differs from the one the working set was scored in, ``ask()``
+  first hands out the working set and the best-so-far for re-scoring (C + 1
+  candidates, counted in ``evaluations`` like any other: a budget buys
+  re-scores too); ``tell`` replaces their scores, and the best-so-far becomes
+  the re-scored incumbent, or a working controller if strictly better.  So
+  mutants are only ever compared with scores of their own phase, and at the
+  end ``best_genome`` is the best under the last phase's scoring.  A
+  re-score draws no random numbers.
 ``state_dict()`` is JSON-safe (rng state from ``rng.bit_generator.state``),
 so a run resumes bit-for-bit from a checkpoint taken between any two calls.
 """
@@ -28,7 +39,8 @@ import math
 
 import numpy as np
 
-STATE_FORMAT = "serial-search-v1"
+STATE_FORMAT = "serial-search-v2"
+OLD_FORMATS = ("serial-search-v1",)       # kept no phase: re-scored on the next ask
 
 
 def _default_to_json(genome):
@@ -70,7 +82,7 @@ class SerialSearch:
                  n_generations: int = 4000, reseed_every: int = 200, rng=None,
                  maximize: bool = True, accept_ties: bool = False,
                  genome_to_json=_default_to_json,
-                 genome_from_json=_default_from_json):
+                 genome_from_json=_default_from_json, phase_fn=None):
         if rng is None:
             raise ValueError("SerialSearch needs rng (a numpy Generator or a seed)")
         if n_working < 1 or n_generations < 0 or reseed_every < 1:
@@ -83,6 +95,9 @@ class SerialSearch:
         self.reseed_every = int(reseed_every)
         self.maximize, self.accept_ties = bool(maximize), bool(accept_ties)
         self.genome_to_json, self.genome_from_json = genome_to_json, genome_from_json
+        self.phase_fn = phase_fn
+        self.phase = None              # phase the working scores and best_score are of
+        self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
         self.evaluations = 0
         self.working = None            # list of genomes once initialized
@@ -117,10 +132,20 @@ class SerialSearch:
         if self.pending is None:
             if self.working is None:
                 self.pending = [self.init_fn(self.rng) for _ in range(self.n_working)]
+            elif self._stale():
+                self.pending = [_copy(g) for g in self.working] + [_copy(self.best_genome)]
+                self.rescoring = True
             else:
                 self.pending = [self.mutate_fn(g, self.rng, e)
                                 for g, e in zip(self.working, self.extras)]
         return list(self.pending)
+
+    def current_phase(self):
+        """Phase of the round ``ask`` hands out next (None without ``phase_fn``)."""
+        return None if self.phase_fn is None else tuple(self.phase_fn(self.generation))
+
+    def _stale(self) -> bool:
+        return self.phase_fn is not None and self.current_phase() != self.phase
 
     def tell(self, scores, extras=None) -> None:
         """Scores (and optional extras) for the candidates of the last ask."""
@@ -132,8 +157,12 @@ class SerialSearch:
         if scores.size != n or len(extras) != n:
             raise ValueError(f"tell: expected {n} scores and extras, got "
                              f"{scores.size} and {len(extras)}")
+        if self.rescoring:
+            self._tell_rescored(scores, extras)
+            return
         if self.working is None:
             self.working, self.scores, self.extras = list(self.pending), scores, extras
+            self.phase = self.current_phase()
         else:
             for i in range(n):
                 if self._better(scores[i], self.scores[i], self.accept_ties):
@@ -147,6 +176,18 @@ class SerialSearch:
             self.best_genome, self.best_score = _copy(self.working[i]), float(self.scores[i])
         if self.generation > 0 and self.generation % self.reseed_every == 0:
             self._reseed()
+        self.history.append((self.evaluations, self.best_score))
+
+    def _tell_rescored(self, scores, extras) -> None:
+        """Scores of the working set and the incumbent under the new phase."""
+        c = self.n_working
+        self.scores, self.extras = scores[:c].copy(), extras[:c]
+        self.best_score = float(scores[c])
+        i = max(range(c), key=lambda k: (self._key(self.scores[k]), -k))
+        if self._better(self.scores[i], self.best_score):
+            self.best_genome, self.best_score = _copy(self.working[i]), float(self.scores[i])
+        self.phase, self.rescoring, self.pending = self.current_phase(), False, None
+        self.evaluations += c + 1
         self.history.append((self.evaluations, self.best_score))
 
     def _reseed(self):
@@ -175,6 +216,8 @@ class SerialSearch:
             "scores": None if self.scores is None else [_score_to_json(s) for s in self.scores],
             "extras": None if self.extras is None else [_extra_to_json(e) for e in self.extras],
             "pending": None if self.pending is None else [enc(g) for g in self.pending],
+            "rescoring": self.rescoring,
+            "phase": None if self.phase is None else list(self.phase),
             "best_genome": None if self.best_genome is None else enc(self.best_genome),
             "best_score": _score_to_json(self.best_score),
             "history": [[int(e), _score_to_json(b)] for e, b in self.history],
@@ -182,7 +225,7 @@ class SerialSearch:
 
     def load_state_dict(self, state: dict) -> None:
         """Restore a :meth:`state_dict` snapshot (config included)."""
-        if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
+        if not isinstance(state, dict) or state.get("format") not in (STATE_FORMAT, *OLD_FORMATS):
             raise ValueError(f"not a {STATE_FORMAT} checkpoint")
         name = state["rng"].get("bit_generator")
         if name != self.rng.bit_generator.state["bit_generator"]:
@@ -203,6 +246,9 @@ class SerialSearch:
             np.array([num(s) for s in state["scores"]], dtype=np.float64)
         self.extras = opt(state["extras"], _extra_from_json)
         self.pending = opt(state["pending"], dec)
+        self.rescoring = bool(state.get("rescoring", False))
+        phase = state.get("phase")
+        self.phase = None if phase is None else tuple(phase)
         self.best_genome = None if state["best_genome"] is None else dec(state["best_genome"])
         self.best_score = num(state["best_score"])
         self.history = [(int(e), num(b)) for e, b in state["history"]]
