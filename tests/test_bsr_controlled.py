@@ -34,7 +34,7 @@ def test_bsr_genome_has_parameters_for_the_driven_joints_only(task):
         assert np.array_equal(g.limits, task.fig.actuator_limits()[driven])
         assert fam.from_json(fam.to_json(g)).n_act == 6
         ci = fam.encode([g]).ci[0]
-        head = 2 if name == "bsr-time" else 3 + len(fam.sense_indices)
+        head = 3 if name == "bsr-time" else 3 + len(fam.sense_indices)   # time: [R, n_act, variable]
         assert list(ci[head:head + 6]) == driven
 
 
