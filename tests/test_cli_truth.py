@@ -243,6 +243,7 @@ def _readme_commands():
     from pathlib import Path
     text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     for block in re.findall(r"```\n(.*?)```", text, flags=re.S):
+        block = block.replace("\\\n", " ")            # a command continued with a backslash
         for line in block.splitlines():
             line = line.split(" #")[0].strip()
             if line.startswith("gpmotion ") and not line.startswith("gpmotion bench"):
