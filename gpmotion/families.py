@@ -46,6 +46,14 @@ class Family:
         return float(self.options.get("tau") or 0.1)
 
 
+def _check_erc_range(r):
+    """Random constants are drawn uniformly from [lo, hi]: two finite numbers, lo < hi."""
+    ok = (isinstance(r, (list, tuple)) and len(r) == 2
+          and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r))
+    if not ok or not (np.all(np.isfinite(r)) and -1e6 <= r[0] < r[1] <= 1e6):
+        raise ValueError(f"erc_range must be [lo, hi] with finite lo < hi within ±1e6, got {r!r}")
+
+
 class GPFamily(Family):
     """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
     name = "gp"
@@ -66,6 +74,7 @@ class GPFamily(Family):
         self.subgoal_table = subgoal_table(goals, task.fig.sense_names)
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
+        _check_erc_range(self.options["erc_range"])
         self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
                                primitives,
                                sense_names=task.fig.sense_names, erc_range=tuple(erc_range),
@@ -110,6 +119,9 @@ class BSRFamily(Family):
     # rollout's default τ, exactly as under a GP controller.
     def __init__(self, task: Task, rules=None, bsr_dt=0.05, **options):
         super().__init__(task, rules=rules, bsr_dt=bsr_dt, **options)
+        if not isinstance(bsr_dt, (int, float)) or not 0.001 <= float(bsr_dt) <= 1.0:
+            # a tick of 1e-9 s lets unlimited-torque joints fling a figure metres (not travel)
+            raise ValueError(f"bsr_dt (the BSR controller tick) must be within 0.001..1 s, got {bsr_dt!r}")
         self.actuators = task.controlled_actuators()
         self.limits = task.fig.actuator_limits()[self.actuators]
         if not np.all(np.isfinite(self.limits)):

@@ -280,3 +280,20 @@ def test_resume_of_a_series_folder_names_its_runs(tmp_path, capsys):
         (tmp_path / "s" / f"seed{k}" / "config.json").write_text("{}")
     assert main(["resume", str(tmp_path / "s")]) == 2
     _one_line_error(capsys, "series of 2 runs", f"gpmotion resume {tmp_path / 's' / 'seed1'}")
+
+
+def test_family_options_from_a_file_are_validated():
+    """A hand-edited best.json may not carry a reversed ERC range or a degenerate BSR tick."""
+    import pytest
+
+    from gpmotion.families import make_family
+    from gpmotion.task import get_task
+    task = get_task("lamp_hop")
+    for bad in ([1.0, -1.0], [0.0, float("inf")], ["a", 1]):
+        with pytest.raises(ValueError, match="erc_range"):
+            make_family("gp", task, erc_range=bad)
+    for bad in (0.0, -1.0, 1e-9, "x"):
+        with pytest.raises(ValueError, match="bsr_dt"):
+            make_family("bsr-time", task, bsr_dt=bad)
+    make_family("gp", task, erc_range=[-2.0, 2.0])
+    make_family("bsr-time", task, bsr_dt=0.05)
