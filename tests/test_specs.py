@@ -141,3 +141,12 @@ def test_a_figure_names_its_ground():
                         ("soft", "table")):
         with pytest.raises(SpecError, match=needle):
             load_figure({"extends": "lamp", "ground": bad})
+
+
+def test_a_huge_figure_name_is_one_line_error():
+    import pytest
+
+    from gpmotion.figures import load_figure
+    from gpmotion.figures.spec import SpecError
+    with pytest.raises(SpecError, match="at most"):
+        load_figure({"extends": "lamp", "name": "x" * 1_000_000})

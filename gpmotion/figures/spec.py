@@ -215,12 +215,17 @@ def _tree_order(spec_bodies, joints, root_body):
     return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
 
 
+MAX_NAME = 200
+
+
 def _name_and_bodies(spec: dict, parse_body):
     """The figure's name, its raw [[bodies]] list and the parsed bodies by name
     (shared by the planar and the 3-D compilers; ``parse_body(b, i)`` differs)."""
     name = spec.get("name")
     if not isinstance(name, str) or not name:
         raise SpecError("figure: needs a 'name'")
+    if len(name) > MAX_NAME:          # a name is drawn in titles: a huge one stalls rendering
+        raise SpecError(f"figure: 'name' is {len(name):,} characters; at most {MAX_NAME}")
     raw_bodies = spec.get("bodies")
     if not isinstance(raw_bodies, list) or not raw_bodies:
         raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
