@@ -4,7 +4,6 @@ import inspect
 import json
 import random
 import re
-import sys
 from pathlib import Path
 
 import pytest
@@ -30,21 +29,6 @@ def test_check_primitive_has_a_real_signature():
     params = inspect.signature(gpmotion.check_primitive).parameters
     assert "name_or_prim" in params and "plugins" in params and "args" not in params
     assert "task" in inspect.signature(gpmotion.check_task).parameters
-
-
-@pytest.fixture
-def forget_plugins():
-    """Unregister the primitives a test's plugin folder adds: the default GP
-    function set is every registered primitive, so later tests must not see them."""
-    from gpmotion.gp import primitives
-    primitives.load_builtin()                   # built-ins stay registered
-    before, mods = set(primitives.names()), set(sys.modules)
-    yield
-    for name in set(primitives.names()) - before:
-        primitives.unregister(name)
-    for m in set(sys.modules) - mods:
-        if m.startswith("gpmotion_plugin_"):
-            del sys.modules[m]
 
 
 PLUGIN = '''import math
