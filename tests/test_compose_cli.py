@@ -1,4 +1,4 @@
-"""`gpmotion compose` (python -m gpmotion.compose until cli.py registers it): exit codes and outputs."""
+"""`gpmotion compose` (also `python -m gpmotion.compose`): exit codes and outputs."""
 import json
 
 import pytest

@@ -4,9 +4,8 @@
     gpmotion compose SCRIPT --composite careless.json [--out DIR] [--resume]
     gpmotion compose SCRIPT --controllers ... --no-search        # score the given switches only
 
-Until cli.py registers it, the same command runs as ``python -m gpmotion.compose``.
-To register it in cli.py: ``add_arguments(sub.add_parser("compose", help=HELP))`` in
-``parser()`` and ``COMMANDS["compose"] = run_command``.
+cli.py registers it (``add_arguments`` and ``run_command``); ``python -m gpmotion.compose``
+runs the same command.
 """
 from __future__ import annotations
 
@@ -93,11 +92,6 @@ def _filmstrips(out: Path, careless, best) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="gpmotion compose", description=HELP)
-    add_arguments(ap)
-    args = ap.parse_args(argv)
-    try:
-        return run_command(args)
-    except (ValueError, OSError) as e:
-        print(f"gpmotion: error: {(str(e).splitlines() or ['?'])[0]}", file=sys.stderr)
-        return 2
+    """``python -m`` entry: the same as ``gpmotion compose ...`` (one error path, in cli.main)."""
+    from ..cli import main as cli_main
+    return cli_main(["compose", *(sys.argv[1:] if argv is None else argv)])

@@ -65,14 +65,9 @@ def _plot(path, r, title):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="gpmotion robustness", description=HELP)
-    add_arguments(ap)
-    args = ap.parse_args(argv)
-    try:
-        return run_command(args)
-    except (ValueError, OSError) as e:
-        print(f"gpmotion: error: {(str(e).splitlines() or ['?'])[0]}", file=sys.stderr)
-        return 2
+    """``python -m`` entry: the same as ``gpmotion robustness ...`` (one error path, in cli.main)."""
+    from ..cli import main as cli_main
+    return cli_main(["robustness", *(sys.argv[1:] if argv is None else argv)])
 
 
 if __name__ == "__main__":
