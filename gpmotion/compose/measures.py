@@ -159,11 +159,10 @@ def _touching(c):
 
 
 def _contact_distance(c, w):
-    """Table 3 contact_distance inside the window: |Δx| of points touching at both ends of a frame pair."""
-    x = c.points()[..., 0]
-    both = _touching(c)[:, 1:] & _touching(c)[:, :-1] & w.mask[:, 1:, None] & w.mask[:, :-1, None]
-    step = np.abs(np.diff(x, axis=1))
-    return c.number(np.where(both, step, 0.0).sum(axis=(1, 2)))
+    """Table 3 contact_distance (the BSR secondary term) inside the window: a point
+    counts as touching only in the window's frames, so frame pairs leaving it add nothing."""
+    force = np.where(w.mask[..., None], c.traj.contact_force, 0.0)
+    return c.number(secondary.contact_distance(force, c.points()[..., 0]))
 
 
 def _speed(c, w):
