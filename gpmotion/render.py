@@ -21,7 +21,6 @@ are skipped; no usable frame at all is a ValueError.
 """
 from __future__ import annotations
 
-import os
 from typing import Mapping, Sequence
 
 import numpy as np

@@ -4,7 +4,6 @@ As lamp_hop, with a pole halfway between start and target and a large
 penalty for touching it.  Pole height (of its lowest point) is a parameter;
 ``gpmotion run lamp_limbo --param pole_height=0.36,0.40,0.44`` runs a series.
 """
-import numpy as np
 
 from gpmotion.gp.subgoals import Subgoal
 from gpmotion.model import make_scene

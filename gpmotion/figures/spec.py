@@ -19,7 +19,7 @@ from pathlib import Path
 import networkx as nx
 import numpy as np
 
-from ..model import ACTUATED, REVOLUTE, SLIDE_X, SLIDE_Z, Figure, Model
+from ..model import REVOLUTE, SLIDE_X, SLIDE_Z, Figure, Model
 
 try:
     import tomllib
