@@ -80,12 +80,11 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     from gpmotion.evaluate import InProcessEvaluator
     from gpmotion.families import make_family
     from gpmotion.replay import replay_genome
-    from gpmotion.search.adapters import make_search
     from gpmotion.task import get_task
     task_name, fam_name, params, options, _, _ = CONFIGS[name]
     task = get_task(task_name, **params)
     fam = make_family(fam_name, task, **options)
-    search = make_search(fam, seed, n_working=WORKING, n_generations=budget // WORKING - 1,
+    search = fam.make_search(seed, n_working=WORKING, n_generations=budget // WORKING - 1,
                          reseed_every=RESEED)
     ev = InProcessEvaluator(task, fam, threads=1)
     ev.evaluate([fam.random(np.random.default_rng(seed))])           # compile / load the cache
@@ -96,7 +95,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, search.best)
     gait, f = gaits.gait_of(traj)
-    rec = {"config": name, "seed": seed, "budget": budget, "evaluations": search.search.evaluations,
+    rec = {"config": name, "seed": seed, "budget": budget, "evaluations": search.evaluations,
            "gait": gait, "cost": float(costs[0]), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
            **{k: float(v[0]) for k, v in measures.items()},
            "features": {k: v for k, v in f.__dict__.items()},

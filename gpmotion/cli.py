@@ -50,16 +50,20 @@ def _params(items):
 
 def _add_run_args(p):
     from .cli_options import add_arguments
+    from .families import DEFAULT_FAMILY, family_names
     p.add_argument("task", help="task name (gpmotion list tasks; gpmotion show TASK)")
-    p.add_argument("--controller", default="gp", help="gp | bsr-sense | bsr-time (default gp)")
+    p.add_argument("--controller", default=DEFAULT_FAMILY,
+                   help=f"controller family: {' | '.join(family_names())} (default {DEFAULT_FAMILY}; "
+                        "gpmotion list controllers)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--seeds", type=int, default=1,
                    help="independent runs with seeds seed..seed+K-1; prints an aggregate at the end")
     p.add_argument("--actuation", choices=["pd", "kinematic"],
-                   help="pd: targets drive PD servos (GP default); kinematic: joints follow "
-                        "targets with a time constant τ (BSR default)")
-    p.add_argument("--preset", help="GP preset: default | gritz-hahn (the paper's terminals, "
-                   "functions and breeding; lamp tasks); explicit options win")
+                   help="pd: targets drive PD servos; kinematic: joints follow targets with a "
+                        "time constant τ (default: the family's, gpmotion list controllers)")
+    p.add_argument("--preset", help="a family's named configuration, e.g. gp's default | "
+                   "gritz-hahn (the paper's terminals, functions and breeding; lamp tasks); "
+                   "explicit options win")
     p.add_argument("--figure", metavar="VARIANT.toml",
                    help="run the task on a figure variant, a TOML file or a registered figure "
                         "(it must have the joints, sites, contacts and senses the task uses)")
@@ -102,6 +106,7 @@ def _activate_plugins(args) -> list:
 
 
 def parser() -> argparse.ArgumentParser:
+    from .families import family_names
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -146,15 +151,18 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
     _add_plugins_arg(p)
-    p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
+    p = sub.add_parser("compare", help="controller families side by side on one task under "
+                       "one evaluation budget")
     p.add_argument("task", help="task name (gpmotion list tasks)")
-    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time",
-                   help="comma list of controller families (default gp,bsr-sense,bsr-time)")
+    p.add_argument("--controllers", default=",".join(family_names()),
+                   help=f"comma list of controller families (default {','.join(family_names())})")
     p.add_argument("--seeds", type=int, default=5, help="runs per family, seeds 0..K-1 (default 5)")
     p.add_argument("--budget", type=int, default=5000, help="evaluations per run (default 5000)")
     p.add_argument("--actuation", choices=["pd", "kinematic"], default="pd",
                    help="one actuation for every family (default pd)")
-    p.add_argument("--population", type=int, help="GP population (default 100; needs gp in --controllers)")
+    p.add_argument("--population", type=int,
+                   help="population of the population-based searches under the budget (default: "
+                        "each family's; needs such a family in --controllers)")
     p.add_argument("--param", action="append", metavar="KEY=VALUE",
                    help="task parameter (gpmotion show TASK)")
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
@@ -198,12 +206,43 @@ def main(argv=None) -> int:
     except BrokenPipeError:                 # `gpmotion show TASK | head`
         sys.stderr.close()
         return 0
-    except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
+    except Exception as e:
+        if not _input_error(e):
+            raise                           # a bug: its traceback, not a one-liner
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
-        if type(e).__name__ in ("WorkerLost", "SchedulerLost") and "resume" not in msg:
+        if _evaluator_lost(e) and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
         return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
+
+
+def _evaluator_lost(e: BaseException) -> bool:
+    from .evaluators import SchedulerLost, WorkerLost
+    return isinstance(e, (WorkerLost, SchedulerLost))
+
+
+def _input_error(e: BaseException) -> bool:
+    """Errors that are the user's input, not a bug: a ValueError (our bad-input
+    convention) or an unknown name (KeyError) raised by gpmotion's own code or
+    a plugin, a file the OS refuses, a lost worker or scheduler.  The same
+    types raised inside numpy, numba, DEAP or the standard library are bugs."""
+    if isinstance(e, OSError) or _evaluator_lost(e):
+        return True
+    if not isinstance(e, (ValueError, KeyError)):
+        return False
+    tb = e.__traceback__
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    return _ours(tb.tb_frame)
+
+
+def _ours(frame) -> bool:
+    """Code of gpmotion (its package, tasks, primitives) or of a plugin folder."""
+    from . import plugins
+    if str(frame.f_globals.get("__name__", "")).startswith("gpmotion"):
+        return True
+    f = Path(frame.f_code.co_filename).resolve()
+    return any(f.is_relative_to(d) for d in getattr(plugins, "_FOLDERS", {}))
 
 
 def _help(ap, topic):
@@ -225,7 +264,7 @@ def _help(ap, topic):
 
 def cmd_list(args):
     from . import figure_names
-    from .families import FAMILIES
+    from .families import family_class, family_names
     from .gp import primitives
     from .task import get_task, task_names
     _activate_plugins(args)
@@ -241,7 +280,10 @@ def cmd_list(args):
     if args.what in ("all", "primitives"):
         print("primitives:", ", ".join(f"{n}/{primitives.get(n).arity}" for n in primitives.names()))
     if args.what in ("all", "controllers"):
-        print("controllers:", ", ".join(FAMILIES))
+        print("controllers:")
+        for n in family_names():
+            c = family_class(n)
+            print(f"  {n:<12} {c.description} (default actuation {c.default_actuation})")
 
 
 def cmd_show(args):
@@ -252,12 +294,12 @@ def cmd_show(args):
 
 def _run_configs(args):
     from .cli_options import collect
-    from .families import FAMILIES
+    from .families import family_class, family_names
     from .names import unknown
     from .records import validate_number
     from .run import RunConfig
-    if args.controller not in FAMILIES:
-        raise ValueError(unknown("controller", args.controller, FAMILIES))
+    if args.controller not in family_names():
+        raise ValueError(unknown("controller", args.controller, family_names()))
     params = _params(args.param)
     plugins = _activate_plugins(args)     # before the options: --primitives may name a plugin's
     series = {k: v.split(",") for k, v in params.items() if "," in v}
@@ -268,8 +310,8 @@ def _run_configs(args):
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
     search, fam = collect(args, args.controller)
     if args.preset:
-        from .gp.presets import apply_preset
-        fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
+        fam, search = family_class(args.controller).apply_preset(args.preset, args.task, fam,
+                                                                 search)
     if args.figure:
         params["figure"] = _figure_variant(args.task, args.figure)
     values = next(iter(series.values())) if series else [None]
@@ -396,9 +438,8 @@ def cmd_replay(args):
         out.mkdir(parents=True, exist_ok=True)
         render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name, task=task)
         print(f"  wrote {out / 'filmstrip.png'} and {out / 'motion.gif'}")
-        if family.name == "gp":
-            from .run import plot_gp_trees
-            plot_gp_trees(out / "trees.png", task, family, genome)
+        if family.plot_file:
+            family.plot(out / family.plot_file, genome)
 
 
 def _print_replay(task, family, actuation, traj, costs, measures, ok):
@@ -419,7 +460,7 @@ def cmd_render(args):
     if bool(args.source) == bool(args.figure):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
     if args.figure and args.trees:
-        raise ValueError("--trees needs a GP controller, not --figure")
+        raise ValueError("--trees draws a controller's structure, not a --figure's")
     if args.source and args.seconds is not None:
         raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
                          "(the task's 'seconds' parameter)")
@@ -438,10 +479,7 @@ def cmd_render(args):
         traj = replay_genome(task, family, actuation, genome)[0]
         title = f"{task.name} ({family.name})"
         if args.trees:
-            if family.name != "gp":
-                raise ValueError("--trees needs a GP controller")
-            from .run import plot_gp_trees
-            plot_gp_trees(args.trees, task, family, genome)
+            family.plot(args.trees, genome)       # a family with nothing to draw says so
             print(f"wrote {args.trees}")
     render_trajectory(traj, args.output, args.gif, title=title, task=task)
     print(f"wrote {args.output}" + (f" and {args.gif}" if args.gif else ""))
@@ -449,19 +487,22 @@ def cmd_render(args):
 
 def cmd_compare(args):
     from .compare import compare
-    from .families import FAMILIES
+    from .families import family_class, family_names
+    from .names import unknown
     from .records import validate_number
     ctrls = [c.strip() for c in args.controllers.split(",") if c.strip()]
     for c in ctrls:
-        if c not in FAMILIES:
-            raise ValueError(f"--controllers: unknown {c!r}; known: {', '.join(FAMILIES)}")
+        if c not in family_names():
+            raise ValueError(f"--controllers: {unknown('controller', c, family_names())}")
     validate_number("--seeds", args.seeds, lo=1, hi=1000, integer=True)
     validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
-    if args.population is not None and "gp" not in ctrls:
-        raise ValueError("--population does not apply: it is the GP population size and "
-                         "--controllers has no gp")
-    population = validate_number("--population", 100 if args.population is None else args.population,
-                                 lo=2, hi=10**6, integer=True)
+    with_population = [c for c in ctrls if family_class(c).takes_population]
+    if args.population is not None and not with_population:
+        raise ValueError(f"--population does not apply: no family in --controllers has a "
+                         f"population (those with one: "
+                         f"{', '.join(n for n in family_names() if family_class(n).takes_population)})")
+    population = validate_number("--population", args.population, lo=2, hi=10**6, integer=True,
+                                 allow_none=True)
     out = args.out or f"runs/compare-{args.task}"
     _activate_plugins(args)
     rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,

@@ -10,28 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .evaluation import Evaluation
 from .families import Family, make_family
 from .sim.rollout import rollout
 from .task import Task, get_task
-
-
-@dataclass
-class Evaluation:
-    """Scores of a batch: costs (lower is better) and why."""
-    costs: np.ndarray                    # float64[n]
-    success: np.ndarray                  # bool[n]
-    failed: np.ndarray                   # bool[n] diverged simulations
-    measures: dict[str, np.ndarray]      # raw term values [n]
-    extras: list | None = None           # per-genome normalized sense trajectories (BSR)
-
-    @staticmethod
-    def concat(parts: list["Evaluation"]) -> "Evaluation":
-        extras = None if any(p.extras is None for p in parts) else [x for p in parts for x in p.extras]
-        return Evaluation(np.concatenate([p.costs for p in parts]),
-                          np.concatenate([p.success for p in parts]),
-                          np.concatenate([p.failed for p in parts]),
-                          {k: np.concatenate([p.measures[k] for p in parts]) for k in parts[0].measures},
-                          extras)
 
 
 @dataclass
@@ -69,9 +51,7 @@ class InProcessEvaluator:
             return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
         traj = self.rollout(genomes, progress=progress)
         costs, measures, ok = self.task.score(traj, progress)
-        extras = None
-        if self.family.needs_senses:
-            extras = [self.family.normalized(traj.senses[e]) for e in range(len(genomes))]
+        extras = self.family.extras(traj)
         self.evaluations += len(genomes)
         return Evaluation(costs, ok, traj.diverged.copy(), measures, extras)
 

@@ -36,8 +36,9 @@ def test_preset_expands_to_the_papers_configuration():
     ("gritz-hahn", "lamp_hop", "bsr-sense", "applies to --controller gp"),
 ])
 def test_bad_presets(name, task, family, message):
+    from gpmotion.families import family_class
     with pytest.raises(ValueError, match=message):
-        apply_preset(name, task, family=family)
+        family_class(family).apply_preset(name, task, {}, {})
 
 
 def test_family_terminals_option():
