@@ -100,7 +100,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
            "gait": gait, "cost": float(costs[0]), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
            **{k: float(v[0]) for k, v in measures.items()},
            "features": {k: v for k, v in f.__dict__.items()},
-           "task": task_name, "params": task.p, "family": fam_name, "options": fam.options,
+           "task": task_name, "params": task.params, "family": fam_name, "options": fam.options,
            "genome": fam.to_json(search.best)}
     path = Path(out) / f"{name}-seed{seed}-{budget}.json"
     path.write_text(json.dumps(rec))
@@ -159,7 +159,7 @@ def filmstrips(results: dict, docs: Path) -> list[str]:
         task = get_task(rec["task"], **rec["params"])
         fam = make_family(rec["family"], task, **rec["options"])
         traj = replay_genome(task, fam, fam.default_actuation, fam.from_json(rec["genome"]))[0]
-        path = docs / f"auslander_{task.figure}_{gait.replace(' ', '_')}.png"
+        path = docs / f"auslander_{task.figure.name}_{gait.replace(' ', '_')}.png"
         render_any(traj, filmstrip=str(path),
                    title=f"{gait}: {CONFIGS[rec['config']][5]}, seed {rec['seed']} "
                          f"({rec['distance']:.2f} m)")

@@ -179,7 +179,7 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
             t.scene_at(progress)
         except Exception as e:  # noqa: BLE001
             raise AssertionError(f"task {name}: no scene at progress {progress}: {e}") from e
-    if t.params_at(1.0) != t.p:
+    if t.params_at(1.0) != t.params:
         raise AssertionError(f"task {name}: the curriculum does not end at the task's parameters")
     if t.curriculum:
         c = ev.evaluate(genomes[:1], 0.0)

@@ -234,7 +234,7 @@ def cmd_list(args):
         print("tasks:")
         for n in task_names():
             t = get_task(n)
-            print(f"  {n:<18} {t.figure:<9} {t.description}")
+            print(f"  {n:<18} {t.figure.name:<9} {t.description}")
         print("  (parameters, cost terms, joints and senses of one task: gpmotion show TASK)")
     if args.what in ("all", "figures"):
         print("figures:", ", ".join(figure_names()))

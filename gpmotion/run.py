@@ -460,7 +460,7 @@ def _versions():
 
 def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cost) -> dict:
     """The safe-JSON controller file (best.json, or a user's controller)."""
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.name, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation, "plugins": list(cfg.plugins),
             "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
 
@@ -490,7 +490,7 @@ def write_artifacts(rd: RunDir, task, family, genome, traj):
 
 def plot_gp_trees(path, task, family, genome):
     from .treeplot import plot_trees
-    names = [task.fig.actuator_names[i] for i in family.actuators]
+    names = [task.figure.actuator_names[i] for i in family.actuators]
     plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 

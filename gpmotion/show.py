@@ -51,7 +51,7 @@ def _bsr_senses(fig) -> list[str]:
 def describe_task(name: str) -> str:
     """A task's parameters, terms, figure, controlled joints, sites and senses."""
     task = get_task(name)
-    fig = task.fig
+    fig = task.figure
     controlled = [fig.actuator_names[i] for i in task.controlled_actuators()]
     held = [n for n in fig.actuator_names if n not in controlled]
     gp_defaults = ", ".join(f"{k} {v}" for k, v in task.gp_defaults.items())

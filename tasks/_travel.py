@@ -51,13 +51,13 @@ class TravelTask(Task):
     record_every = 20           # 50 frames/s resolve every gait event these terms use
 
     def validate(self):
-        self.terms = travel_terms(self.p)      # weights are parameters
+        self.terms = travel_terms(self.params)      # weights are parameters
 
     def measure(self, traj):
         return travel_measures(traj)
 
     def success(self, traj, m):
-        return m["distance"] >= self.p["success_distance"]
+        return m["distance"] >= self.params["success_distance"]
 
     def describe(self, traj, m):
         return gait(traj, m)

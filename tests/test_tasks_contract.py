@@ -53,8 +53,8 @@ def test_phase_in_ramps_style_terms():
     assert [t.factor(p) for p in (0.0, 0.2, 0.4, 0.6, 1.0)] == pytest.approx([0, 0, 0.5, 1, 1])
     task = get_task("lamp_hop", seconds=0.3)
     from gpmotion.controllers import schedule
-    ctrl = schedule.constant(task.fig.model.neutral)
-    tr = gpmotion.rollout(task.fig, task.scene(), ctrl, n_steps=task.n_steps)
+    ctrl = schedule.constant(task.figure.model.neutral)
+    tr = gpmotion.rollout(task.figure, task.scene(), ctrl, n_steps=task.n_steps)
     early, m, _ = task.score(tr, progress=0.0)
     late, _, _ = task.score(tr, progress=1.0)
     assert early[0] == pytest.approx(m["distance"][0])       # only the main goal at the start
@@ -65,7 +65,7 @@ def test_limbo_pole_hits_are_penalized():
     task = get_task("lamp_limbo", seconds=0.5, pole_height=0.38, distance=0.38)
     # the pole crosses x = 0.19 at 38 cm: right through the neutral lamp's shade
     from gpmotion.controllers import schedule
-    tr = gpmotion.rollout(task.fig, task.scene(), schedule.constant(task.fig.model.neutral),
+    tr = gpmotion.rollout(task.figure, task.scene(), schedule.constant(task.figure.model.neutral),
                           n_steps=task.n_steps)
     cost, m, ok = task.score(tr)
     assert m["pole"][0] >= 1.0 and not ok[0]
@@ -80,7 +80,7 @@ def test_limbo_pole_comes_down_over_the_curriculum():
     a, b = ease.phase
     assert task.params_at(0.0)["pole_height"] == ease.start > 0.5      # above the standing lamp
     assert task.params_at((a + b) / 2)["pole_height"] == pytest.approx((ease.start + 0.40) / 2)
-    assert task.params_at(1.0) == task.p
+    assert task.params_at(1.0) == task.params
     ev = InProcessEvaluator(task, make_family("gp", task))
     assert ev.scene(0.0).poles[0, 1] == pytest.approx(ease.start + 0.01)
     assert ev.scene(1.0).poles[0, 1] == pytest.approx(0.41)

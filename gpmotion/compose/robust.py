@@ -166,8 +166,8 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
     The starts depend on (seed, round_) only: the same for every backend and after a resume.
     """
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, k, round_rng(seed, round_), sizes)
-    traj = robust_rollout(task.fig, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, k, round_rng(seed, round_), sizes)
+    traj = robust_rollout(task.figure, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation or family.default_actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
@@ -185,9 +185,9 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
     if not 1 <= trials <= 100_000:
         raise ValueError(f"trials must be in 1..100000, got {trials}")
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, trials, round_rng(seed, 0), sizes)
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, round_rng(seed, 0), sizes)
     q0s[0], qd0s[0] = q0, qd0
-    traj = robust_rollout(task.fig, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
+    traj = robust_rollout(task.figure, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
