@@ -106,7 +106,7 @@ def spec_of(task: Task, family: Family, actuation: str, plugins=()) -> dict:
     never folder paths.
     """
     from .plugins import for_record
-    return {"task": task.name, "params": dict(task.params), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation,
             "plugins": [{k: v for k, v in r.items() if k != "path"} for r in for_record(plugins)],
             "code": code_digest()}
