@@ -48,10 +48,14 @@ import os
 import pkgutil
 import re
 import sys
-import tomllib
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10
+    import tomli as tomllib
 
 GROUP = "gpmotion.plugins"
 MANIFEST = "gpmotion-plugin.toml"
