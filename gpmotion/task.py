@@ -392,7 +392,7 @@ def task_id(name: str, *, recorded: bool = False) -> str:
     newest = _newest()
     if name not in newest:
         from .names import unknown
-        raise KeyError(unknown("task", name, list(newest) + list(_TASKS)))
+        raise KeyError(unknown("task", name, newest))
     if recorded:
         if f"{name}-v1" not in _TASKS:
             raise KeyError(f"the record names task {name!r} without a version (written before "
