@@ -487,3 +487,20 @@ def test_starman_legs_can_swing_over_the_top():
         lo, hi = lim[names.index(leg)]
         reach = min(abs(rest + lo), abs(rest + hi))          # closest approach to the head
         assert reach < 0.5, (leg, reach)
+
+
+def test_beryl_can_tuck():
+    # a tumble needs the knees to the chest: at full hip flexion the thigh is
+    # within 0.8 rad of the torso and the knee above the hip (before: 1.0 rad of
+    # flexion, the knee 0.2 m below the hip, and Beryl only hopped)
+    import gpmotion
+    from gpmotion.sim import geometry
+    fig = gpmotion.load_figure("beryl")
+    m = fig.model
+    q = fig.q_default.copy()
+    for j, name in enumerate(fig.actuator_names):
+        if name.startswith("hip"):
+            q[m.act_dof[j]] = fig.actuator_limits()[j, 1]
+    pts = geometry.points_world(m, geometry.link_poses(m, q[None]), m.cp_link, m.cp_pos)[0]
+    z = dict(zip(fig.contact_names, pts[:, 1]))
+    assert z["knee_l"] > z["hip"] + 0.25 and z["knee_r"] > z["hip"] + 0.25
