@@ -271,9 +271,9 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     from ..evaluate import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
-    q0s, qd0s = perturbed_starts(task.fig, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
+    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
                                  sizes_of(r))
-    traj = robust_rollout(task.fig, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
+    traj = robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=ev.actuation, default_tau=fam.default_tau,
                           record_senses=fam.needs_senses, threads=ev.threads)
