@@ -28,7 +28,7 @@ from .records import ConfigError, FormatError, validate_number
 from .rundir import RunDir
 from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
                         settings_mismatch)
-from .task import Task, get_task
+from .task import Task, get_task, task_id
 
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
@@ -54,7 +54,11 @@ def build(cfg: RunConfig):
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
-        search = family.make_search(cfg.seed, **cfg.search)
+        from .compose.robust import normalize
+        cfg.robust = normalize(cfg.robust, task)     # the figure's default sizes filled in
+        noisy = family.noisy_settings() if cfg.robust else {}   # new starts each generation
+        given = {k: v for k, v in cfg.search.items() if v is not None}
+        search = family.make_search(cfg.seed, **{**noisy, **given})
     except TypeError as e:           # an option the constructor does not take
         raise ConfigError(f"{cfg.task} ({cfg.family}): {e}") from None
     actuation = cfg.actuation or family.default_actuation
@@ -63,9 +67,10 @@ def build(cfg: RunConfig):
 
 def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
+    robust = {**cfg.robust, "seed": cfg.seed} if cfg.robust else None   # starts: (seed, generation)
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
                           actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
-                          **(backend or {}))
+                          robust=robust, **(backend or {}))
 
 
 # ------------------------------------------------------------------ progress
@@ -207,6 +212,9 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
     try:
         if resume:
             rd, cfg, doc = _open_resume(out)
+            cfg.task = task_id(cfg.task, recorded=True)      # bare: recorded before ids, its v1
+            if given is not None and given.task in (cfg.task, cfg.task.rsplit("-v", 1)[0]):
+                given.task = cfg.task                        # the bare name of the recorded task
             task, family, search, actuation = build(cfg)
             if given is not None:
                 check_resume_request(given, cfg, doc, search, rd.path)
@@ -220,6 +228,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                 search.extend(doc["extended_generations"], search.schedule)
         else:       # validate everything (the scheduler too) before touching the disk
             task, family, search, actuation = build(cfg)
+            cfg.task = task.id                                # records store the versioned id
             evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd = RunDir.create(out, force=force)
             from .plugins import for_record
@@ -391,7 +400,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             if max_generations is not None and done_now >= max_generations:
                 break
             genomes = search.ask()
-            ev = evaluator.evaluate(genomes, search.progress)
+            ev = evaluator.evaluate(genomes, search.progress, generation=search.generation)
             told = False
             search.tell(ev)
             row = _log_row(search, rec.evals + len(genomes), time.perf_counter() - t0)
@@ -439,7 +448,7 @@ def _versions():
 
 def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cost) -> dict:
     """The safe-JSON controller file (best.json, or a user's controller)."""
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation, "plugins": list(cfg.plugins),
             "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
 

@@ -48,9 +48,9 @@ class BSRFamily(Family):
             # a tick of 1e-9 s lets unlimited-torque joints fling a figure metres (not travel)
             raise ValueError(f"bsr_dt (the BSR controller tick) must be within 0.001..1 s, got {bsr_dt!r}")
         self.actuators = task.controlled_actuators()
-        self.limits = task.fig.actuator_limits()[self.actuators]
+        self.limits = task.figure.actuator_limits()[self.actuators]
         if not np.all(np.isfinite(self.limits)):
-            raise ValueError(f"BSR needs finite joint limits on every driven actuator of {task.figure}")
+            raise ValueError(f"BSR needs finite joint limits on every driven actuator of {task.figure.name}")
         self.bsr_dt = min(float(bsr_dt), task.seconds / 8)   # short episodes keep a τ range
 
     def encode(self, genomes):

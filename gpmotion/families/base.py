@@ -105,6 +105,11 @@ class Family:
         return self.search_class(self, seed=seed, task=self.task,
                                  **{**self.search_defaults(self.task), **given})
 
+    def noisy_settings(self) -> dict:
+        """Search settings for evaluations that change between generations (robust
+        starts redrawn each generation): a search must not reuse an old cost."""
+        return {}
+
     def budget_settings(self, budget: int, population: int | None = None) -> dict:
         """Search settings that spend about ``budget`` evaluations (``compare``)."""
         raise NotImplementedError

@@ -17,14 +17,14 @@ class BSRSenseFamily(BSRFamily):
 
     def __init__(self, task, rules=None, **options):
         super().__init__(task, rules=rules or 8, **options)
-        self.sense_indices = bsr_genome.table1_sense_indices(task.fig.sense_names)
+        self.sense_indices = bsr_genome.table1_sense_indices(task.figure.sense_names)
 
     def random(self, rng):
         return bsr_genome.random_sense_genome(rng, self.options["rules"], len(self.sense_indices),
                                               self.limits, self.bsr_dt, self.task.seconds)
 
     def normalized(self, senses):
-        m = self.task.fig.model
+        m = self.task.figure.model
         return bsr_mutation.normalized_sense_trajectory(senses, m.sense_lo, m.sense_hi,
                                                         self.sense_indices)
 

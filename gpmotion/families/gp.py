@@ -133,13 +133,13 @@ class GPFamily(Family):
         goals = task_subgoals(task) if subgoals else ()
         if subgoals:
             self.options["subgoals"] = True
-        self.subgoal_table = subgoal_table(goals, task.fig.sense_names)
+        self.subgoal_table = subgoal_table(goals, task.figure.sense_names)
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         _check_erc_range(self.options["erc_range"])
         self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
-                               primitives,
-                               sense_names=task.fig.sense_names, erc_range=tuple(erc_range),
+                               primitives or task.primitives,     # the task names its set
+                               sense_names=task.figure.sense_names, erc_range=tuple(erc_range),
                                flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
 
@@ -176,7 +176,7 @@ class GPFamily(Family):
             raise ValueError("not a GP controller (expected kind 'gp' with a list of trees)")
         trees = data["trees"]
         if len(trees) != len(self.actuators):
-            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure} has "
+            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure.name} has "
                              f"{len(self.actuators)} actuated joints")
         for t in trees:                       # validate: whitelist, size and depth caps
             bytecode.tokens_to_tree(t, self.info)
@@ -184,7 +184,7 @@ class GPFamily(Family):
 
     def plot(self, path, genome) -> None:
         from ..treeplot import plot_trees
-        names = [self.task.fig.actuator_names[i] for i in self.actuators]
+        names = [self.task.figure.actuator_names[i] for i in self.actuators]
         plot_trees(path, self.to_json(genome)["trees"], titles=names,
                    suptitle=f"{self.task.name} ({self.name})")
 
@@ -203,6 +203,9 @@ class GPFamily(Family):
             if isinstance(pop, int) and isinstance(islands, int) and islands >= 1:
                 opts["migrants"] = min(2, pop // islands // 2)
         return super().make_search(seed, **opts)
+
+    def noisy_settings(self) -> dict:
+        return {"reuse_costs": False}          # copies are re-evaluated on the new starts
 
     def budget_settings(self, budget: int, population: int | None = None) -> dict:
         pop = min(population or BUDGET_POPULATION, budget)

@@ -217,7 +217,7 @@ class KeyframesFamily(Family):
             raise ValueError(f"keys must be an integer in 2..{MAX_KEYS}, got {keys!r}")
         super().__init__(task, keys=int(keys), **options)
         self.actuators = task.controlled_actuators()
-        fig = task.fig
+        fig = task.figure
         neutral = np.asarray(fig.model.neutral, dtype=np.float64)
         lim = fig.actuator_limits()[self.actuators]
         mid = neutral[self.actuators]
