@@ -364,8 +364,8 @@ def cmd_run(args):
             build(cfg)
     dirs = []
     for cfg, out in configs:
-        best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
-                             artifacts=not args.no_artifacts, backend=_backend(args))
+        _, _, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
+                       artifacts=not args.no_artifacts, backend=_backend(args))
         dirs.append(rd.path)
         _summary(rd)
     if len(dirs) > 1:
@@ -407,8 +407,8 @@ def cmd_resume(args):
     backend = _backend(args)
     if args.workers is not None or args.scheduler is not None:
         backend.update(workers=args.workers or 0, scheduler=args.scheduler)
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend,
-                         extend_generations=args.extend_generations)
+    _, _, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend,
+                   extend_generations=args.extend_generations)
     _summary(rd)
 
 
@@ -427,7 +427,7 @@ def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
     _activate_plugins(args)
-    task, family, actuation, genome, rec = load_controller(args.source)
+    task, family, actuation, genome, _ = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
         import json
@@ -480,7 +480,7 @@ def cmd_render(args):
         title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from .replay import load_controller, replay_genome
-        task, family, actuation, genome, rec = load_controller(args.source)
+        task, family, actuation, genome, _ = load_controller(args.source)
         traj = replay_genome(task, family, actuation, genome)[0]
         title = f"{task.name} ({family.name})"
         if args.trees:
@@ -510,10 +510,10 @@ def cmd_compare(args):
                                  allow_none=True)
     out = args.out or f"runs/compare-{args.task}"
     _activate_plugins(args)
-    rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
-                       params=_params(args.param), population=population,
-                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
-                       force=args.force)
+    _, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
+                    params=_params(args.param), population=population,
+                    workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
+                    force=args.force)
     print(md)
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
 
@@ -524,7 +524,7 @@ def cmd_export(args):
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
     _activate_plugins(args)
-    task, family, actuation, genome, rec = load_controller(args.source)
+    task, family, actuation, genome, _ = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
     print(f"wrote {args.bvh}: {len(traj.figure.body_names)} joints, {n} frames at "

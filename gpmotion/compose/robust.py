@@ -285,9 +285,8 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
         c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
         pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
         folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
-    extras = None
-    if fam.needs_senses:
-        extras = [fam.normalized(traj.senses[e * k]) for e in range(n)]
+    extras = fam.extras(traj)                                   # per episode; a genome's first start
+    extras = None if extras is None else extras[::k]
     return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
                       traj.diverged.reshape(n, k).any(axis=1), folded, extras)
 
