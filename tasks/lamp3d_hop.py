@@ -62,7 +62,7 @@ def hop3d_measures(task, traj):
     heads = [fig.contact_names.index(c) for c in ("head_tip", "head_rim")]
     head_force = traj.contact_force[..., heads].max(axis=(1, 2))
     fell = base_tilt(traj).max(axis=1) > FELL
-    act = fig.model.act_dof
+    act = fig.model.act_q                # configuration index (the free root has 7)
     neutral = np.abs(traj.q[:, -1, act] - fig.model.neutral).mean(axis=1)
     return {"distance": d[:, -1], "late": late, "moving": moving,
             "head_hit": (head_force > 0).astype(float) + head_force / (fig.total_mass * 9.81),
