@@ -22,6 +22,7 @@ GROUND = {"k_ground": 2500.0, "c_ground": 30.0, "k_tangent": 2500.0, "c_tangent"
 BASE = ("base_back_l", "base_back_r", "base_front_l", "base_front_r")
 FELL = 1.0              # rad: base tilt (angle of its up axis from vertical)
 HALF_WIDTH = 0.08       # m: base centre to its side edge (lamp3d.toml)
+HALF_THICK = 0.015      # m: base centre to its underside
 LAMP3D_PARAMS = {"roll0": 0.05}
 LAMP3D_DOCS = {"roll0": "initial sideways tilt of the base about the travel axis, resting on "
                         "its right edge (rad; 0 = the planar lamp's symmetric start, which never "
@@ -29,13 +30,13 @@ LAMP3D_DOCS = {"roll0": "initial sideways tilt of the base about the travel axis
 
 
 def tilted_start(task):
-    """q_default with the base rolled by roll0 about its right edge (y = −0.08 m on the floor)."""
+    """q_default with the base rolled by roll0 about its lower right edge (y = −0.08 m)."""
     q = task.fig.q_default.copy()
     phi = task.p["roll0"]
     c, s = math.cos(phi), math.sin(phi)
-    z0 = q[2]                                    # base centre above the floor, upright
-    q[1] = -HALF_WIDTH + c * HALF_WIDTH - s * z0
-    q[2] = s * HALF_WIDTH + c * z0
+    edge_z = q[2] - HALF_THICK                   # the upright base's underside
+    q[1] = -HALF_WIDTH + c * HALF_WIDTH - s * HALF_THICK
+    q[2] = edge_z + s * HALF_WIDTH + c * HALF_THICK
     q[3:7] = (math.cos(phi / 2), math.sin(phi / 2), 0.0, 0.0)
     return q, np.zeros(task.fig.nv)
 
@@ -85,7 +86,7 @@ class Lamp3DHop(Task):
     goal_label = "target"
     description = "the 3-D lamp (free base, can tip sideways) hops to a target point"
     params = {"distance": 0.4, "seconds": 3.0, **LAMP3D_PARAMS}
-    bounds = {"distance": (-5.0, 5.0), "roll0": (-0.4, 0.4)}
+    bounds = {"distance": (-5.0, 5.0), "roll0": (0.0, 1.0)}
     param_docs = {"distance": "target x from the start (m; |distance| ≥ 0.05)",
                   "seconds": "episode length (s)", **LAMP3D_DOCS}
     terms = HOP_TERMS

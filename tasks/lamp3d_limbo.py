@@ -17,7 +17,7 @@ class Lamp3DLimbo(Lamp3DHop):
     name = "lamp3d_limbo"
     description = "the 3-D lamp hops to a target, passing under a limbo pole"
     params = {**LampLimbo.params, **LAMP3D_PARAMS}
-    bounds = {**LampLimbo.bounds, "roll0": (-0.4, 0.4)}
+    bounds = {**LampLimbo.bounds, "roll0": (0.0, 1.0)}
     param_docs = {**LampLimbo.param_docs, **LAMP3D_DOCS}
     terms = HOP_TERMS + (
         Term("pole", 2.0, doc="touched the pole (+ 100 × deepest penetration in m)"),

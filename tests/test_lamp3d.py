@@ -29,12 +29,9 @@ def test_upright_3d_lamp_hops_like_the_planar_lamp():
 
 
 def _rolled(fig, phi):
-    """q_default rolled by phi about the base's right edge on the floor."""
-    q = fig.q_default.copy()
-    c, s, z0 = math.cos(phi), math.sin(phi), q[2]
-    q[1], q[2] = -HALF_WIDTH + c * HALF_WIDTH - s * z0, s * HALF_WIDTH + c * z0
-    q[3:7] = (math.cos(phi / 2), math.sin(phi / 2), 0.0, 0.0)
-    return q
+    """q_default rolled by phi about the base's lower right edge (lamp3d_hop's start)."""
+    task = gpmotion.get_task("lamp3d_hop", roll0=phi)
+    return task.initial_state()[0]
 
 
 @pytest.mark.parametrize("factor, tips", [(0.85, False), (1.15, True)])
