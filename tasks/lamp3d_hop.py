@@ -31,14 +31,14 @@ LAMP3D_DOCS = {"roll0": "initial sideways tilt of the base about the travel axis
 
 def tilted_start(task):
     """q_default with the base rolled by roll0 about its lower right edge (y = −0.08 m)."""
-    q = task.fig.q_default.copy()
-    phi = task.p["roll0"]
+    q = task.figure.q_default.copy()
+    phi = task.params["roll0"]
     c, s = math.cos(phi), math.sin(phi)
     edge_z = q[2] - HALF_THICK                   # the upright base's underside
     q[1] = -HALF_WIDTH + c * HALF_WIDTH - s * HALF_THICK
     q[2] = edge_z + s * HALF_WIDTH + c * HALF_THICK
     q[3:7] = (math.cos(phi / 2), math.sin(phi / 2), 0.0, 0.0)
-    return q, np.zeros(task.fig.nv)
+    return q, np.zeros(task.figure.nv)
 
 
 def base_tilt(traj) -> np.ndarray:
@@ -52,7 +52,7 @@ def hop3d_measures(task, traj):
     """lamp_hop's terms for the 3-D lamp (lamp3d_limbo adds the pole)."""
     fig = traj.figure
     base = traj.site("base_centre")[..., :2]                 # [E, F, 2] floor plane
-    goal = np.array([task.p["distance"], 0.0])
+    goal = np.array([task.params["distance"], 0.0])
     d = np.linalg.norm(base - goal, axis=-1)
     at = d < ARRIVED
     first = np.where(at.any(axis=1), at.argmax(axis=1), d.shape[1] - 1)
@@ -95,11 +95,11 @@ class Lamp3DHop(Task):
     view = {"elev": 20, "azim": -70}
 
     def validate(self):
-        if not 0.05 <= abs(self.p["distance"]) <= 5.0:
-            raise ValueError(f"lamp3d_hop: distance must be within 0.05..5 m, got {self.p['distance']}")
+        if not 0.05 <= abs(self.params["distance"]) <= 5.0:
+            raise ValueError(f"lamp3d_hop: distance must be within 0.05..5 m, got {self.params['distance']}")
 
     def scene(self):
-        return make_scene(goal=(self.p["distance"], 0.0, 0.0), **GROUND)
+        return make_scene(goal=(self.params["distance"], 0.0, 0.0), **GROUND)
 
     def initial_state(self):
         return tilted_start(self)

@@ -30,8 +30,8 @@ class Lamp3DLimbo(Lamp3DHop):
         LampLimbo.validate(self)
 
     def scene(self):
-        pole = (self.p["distance"] / 2, self.p["pole_height"] + POLE_RADIUS, POLE_RADIUS)
-        return make_scene(goal=(self.p["distance"], 0.0, 0.0), poles=[pole], **GROUND)
+        pole = (self.params["distance"] / 2, self.params["pole_height"] + POLE_RADIUS, POLE_RADIUS)
+        return make_scene(goal=(self.params["distance"], 0.0, 0.0), poles=[pole], **GROUND)
 
     def measure(self, traj):
         m = hop3d_measures(self, traj)

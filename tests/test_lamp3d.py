@@ -56,13 +56,13 @@ def test_tilted_start_rests_on_an_edge():
     from gpmotion.sim import geometry3d
     task = gpmotion.get_task("lamp3d_hop", roll0=0.1)
     q, _ = task.initial_state()
-    m = task.fig.model
-    corners = [task.fig.contact_names.index(c) for c in ("base_back_r", "base_front_r",
+    m = task.figure.model
+    corners = [task.figure.contact_names.index(c) for c in ("base_back_r", "base_front_r",
                                                           "base_back_l", "base_front_l")]
     def corner_z(q):
         return geometry3d.points_fast(m, q[None, None], m.cp_link[corners], m.cp_pos[corners])[0, 0, :, 2]
-    z, upright = corner_z(q), corner_z(task.fig.q_default)      # upright: 1.5 mm above the floor
-    tr = gpmotion.simulate(task.fig, 0.001, scene=task.scene(), q0=q)
+    z, upright = corner_z(q), corner_z(task.figure.q_default)      # upright: 1.5 mm above the floor
+    tr = gpmotion.simulate(task.figure, 0.001, scene=task.scene(), q0=q)
     assert abs(base_tilt(tr)[0, 0] - 0.1) < 1e-9
     assert np.abs(z[:2] - upright[:2]).max() < 1e-9 and (z[2:] - upright[2:]).min() > 0.015
 
@@ -71,5 +71,5 @@ def test_neutral_term_reads_the_joint_angles_not_the_root():
     """The free root has 7 coordinates and 6 velocities: "neutral" must index q by act_q."""
     task = gpmotion.get_task("lamp3d_hop", roll0=0.0)
     q, _ = task.initial_state()
-    tr = gpmotion.simulate(task.fig, 0.05, scene=task.scene(), q0=q)
+    tr = gpmotion.simulate(task.figure, 0.05, scene=task.scene(), q0=q)
     assert task.measure(tr)["neutral"][0] < 0.01
