@@ -16,7 +16,7 @@ import argparse
 
 import numpy as np
 
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.task import get_task
 

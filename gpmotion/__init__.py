@@ -27,7 +27,7 @@ _mount_plugin_packages()
 __version__ = "0.1.0"          # before the imports below: run.py records it
 
 from .check import check_primitive, check_task
-from .evaluate import Evaluation
+from .evaluation import Evaluation
 from .evaluators import make_evaluator
 from .families import make_family
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure

@@ -251,7 +251,7 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0,
 
     from deap import gp
 
-    from .evaluate import InProcessEvaluator
+    from .inprocess import InProcessEvaluator
     from .families import make_family
     from .task import get_task
 

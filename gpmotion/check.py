@@ -133,7 +133,7 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
 
     from deap import gp as dgp
 
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.families.gp import GPFamily
     from gpmotion.task import Task, get_task
 
@@ -236,7 +236,7 @@ def check_family(family, *, task: str = "lamp_hop", seconds: float = 0.3, seed: 
 
     from gpmotion import cli_options
     from gpmotion.controllers import ControllerBatch
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.search.base import Search
     from gpmotion.task import get_task
 

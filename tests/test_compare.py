@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gpmotion.compare import compare, phase_window, replot
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.replay import load_controller, replay_genome
 from gpmotion.search.serial import serial_generations, serial_rescores

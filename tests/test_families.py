@@ -34,7 +34,7 @@ class PoseFamily(Family):
     def __init__(self, task, step=0.2, **options):
         super().__init__(task, step=float(step), **options)
         self.actuators = task.controlled_actuators()
-        self.limits = task.fig.actuator_limits()[self.actuators]
+        self.limits = task.figure.actuator_limits()[self.actuators]
 
     def random(self, rng):
         lo, hi = self.limits.T
@@ -45,7 +45,7 @@ class PoseFamily(Family):
         return np.clip(genome + rng.normal(0, self.options["step"], genome.shape), lo, hi)
 
     def encode(self, genomes):
-        neutral = self.task.fig.model.neutral
+        neutral = self.task.figure.model.neutral
         rows = []
         for g in genomes:
             pose = neutral.copy()

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gpmotion.cli import main
-from gpmotion.evaluate import Evaluation
+from gpmotion.evaluation import Evaluation
 from gpmotion.families import make_family
 from gpmotion.gp.presets import PAPER_PRIMITIVES, apply_preset
 from gpmotion.search.gp import GPSearch
@@ -123,7 +123,7 @@ def test_cli_preset_runs_and_records_its_expansion(tmp_path, capsys):
 
 
 def test_limbo_without_curriculum_has_the_pole_at_its_height_from_the_start():
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     fixed = get_task("lamp_limbo", pole_height=0.38, pole_start=0.38)
     assert fixed.curriculum == {} and fixed.params_at(0.0)["pole_height"] == 0.38
     ev = InProcessEvaluator(fixed, make_family("gp", fixed))

@@ -155,7 +155,7 @@ def test_normalize_fills_the_figures_defaults_and_refuses_bad_values():
 
 
 def test_batch_evaluation_is_the_aggregate_of_k_perturbed_rollouts():
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     task = get_task("starman_travel", seconds=0.5)
     fam = make_family("bsr-time", task)
     genomes = [fam.random(np.random.default_rng(s)) for s in range(3)]

@@ -259,7 +259,7 @@ def sizes_of(robust: dict) -> Perturbation:
 def batch_evaluation(ev, genomes, progress: float, generation: int):
     """One generation's batch scored from ``ev.robust['starts']`` perturbed starts.
 
-    ``ev`` is an :class:`gpmotion.evaluate.InProcessEvaluator` whose ``robust``
+    ``ev`` is an :class:`gpmotion.inprocess.InProcessEvaluator` whose ``robust``
     holds a normalized setting plus the run's ``seed``.  The starts depend on
     (seed, generation) only, so chunks on any backend and a resumed run see
     the same ones.  Per controller: cost = the aggregate of its K costs;
@@ -268,7 +268,7 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     worst start (``worst``), so a cost recomputed from them (the final-weights
     column) agrees with the aggregate; extras (BSR senses) from its first start.
     """
-    from ..evaluate import Evaluation
+    from ..evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
     q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),

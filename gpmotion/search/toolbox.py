@@ -53,7 +53,7 @@ def make_toolbox(task, family=None, *, evaluator=None, init_depth=(2, 6),
     fixed.  Note ``eaSimple`` does not re-score unchanged copies, so their
     costs may date from an earlier phase; ``GPSearch`` handles that.
     """
-    from ..evaluate import InProcessEvaluator
+    from ..inprocess import InProcessEvaluator
     from ..families.gp import GPFamily
     if selection not in ("roulette", "tournament"):
         raise ValueError(f"selection must be 'roulette' or 'tournament', got {selection!r}")
@@ -102,7 +102,7 @@ def evaluate_population(toolbox_or_family, individuals: Sequence, progress: floa
     Accepts a toolbox from :func:`make_toolbox` (its evaluator) or a family
     (an in-process evaluator is built for ``family.task``).
     """
-    from ..evaluate import InProcessEvaluator
+    from ..inprocess import InProcessEvaluator
     ev = getattr(toolbox_or_family, "evaluator", None)
     if ev is None:
         fam = toolbox_or_family

@@ -1,8 +1,11 @@
-"""One evaluation interface, ``evaluate(genomes) -> Evaluation``, for every search.
+"""The in-process evaluator, and what a worker process runs.
 
-In-process evaluation runs the whole batch in one numba rollout over all
-threads.  Other backends (process pool, Dask) split genomes into chunks and
-call :func:`evaluate_chunk` remotely with plain data only.
+Every evaluator has one interface, ``evaluate(genomes, progress) ->``
+:class:`~gpmotion.evaluation.Evaluation`.  In-process evaluation runs the
+whole batch in one numba rollout over all threads.  The other backends
+(:mod:`gpmotion.evaluators`: process pool, Dask) split genomes into chunks
+and call :func:`evaluate_chunk` in their workers with plain data only: a
+worker is an in-process evaluator rebuilt from :func:`spec_of`.
 """
 from __future__ import annotations
 
