@@ -32,7 +32,7 @@ from .evaluators import make_evaluator
 from .families import make_family
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
 from .gp.primitives import STANDARD as STANDARD_PRIMITIVES, primitive
-from .search.toolbox import evaluate_population, make_toolbox
+from .toolbox import evaluate_population, make_toolbox
 from .model import Figure, Model, Scene, make_scene
 from .plugins import load_folder as load_plugins
 from .records import read_json

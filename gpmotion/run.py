@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
 from .inprocess import spec_of
 from .families import make_family
 from .records import ConfigError, FormatError, validate_number
@@ -440,6 +439,7 @@ def _main_thread():
 
 
 def _versions():
+    from . import __version__       # the package's, set before it imports this module
     import deap
     import numba
     return {"gpmotion": __version__, "python": platform.python_version(), "numpy": np.__version__,

@@ -254,7 +254,7 @@ def test_bad_arguments_raise_one_clear_error(family):
 def test_easimple_with_the_toolbox_on_lamp_hop():
     from deap import algorithms, tools
 
-    from gpmotion.search.toolbox import make_toolbox
+    from gpmotion.toolbox import make_toolbox
     task = get_task("lamp_hop", seconds=0.3)
     tb = make_toolbox(task, generations=2)
     random.seed(0)

@@ -216,4 +216,5 @@ class GPFamily(Family):
     @classmethod
     def apply_preset(cls, name, task_name, family_options, search):
         from ..gp.presets import apply_preset
-        return apply_preset(name, task_name, family_options, search)
+        from ..task import get_task
+        return apply_preset(name, get_task(task_name) if name else None, family_options, search)

@@ -3,7 +3,7 @@ and selection; nothing here runs a simulation).
 
 An individual is a list of trees, one per controlled DOF (actuator).  The
 operators here are shared by :class:`gpmotion.search.gp.GPSearch` and by
-:func:`gpmotion.search.toolbox.make_toolbox`, for DEAP users who prefer their
+:func:`gpmotion.toolbox.make_toolbox`, for DEAP users who prefer their
 own loop (``deap.algorithms.eaSimple`` works out of the box, see
 ``examples/deap_easimple.py``).
 

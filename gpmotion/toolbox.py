@@ -10,10 +10,12 @@ from typing import Sequence
 
 from deap import base, creator, gp, tools
 
-from ..gp.bytecode import MAX_TREE_DEPTH
-from ..gp.operators import (crossover_same_dof, make_tree_operators, mutate_one_dof, random_tree,
+from .families.gp import GPFamily
+from .gp.bytecode import MAX_TREE_DEPTH
+from .gp.operators import (crossover_same_dof, make_tree_operators, mutate_one_dof, random_tree,
                             roulette_indices, tournament_indices)
-from ..task import WORST
+from .inprocess import InProcessEvaluator
+from .task import WORST
 
 FITNESS_CLASS = "GPMotionFitnessMin"
 INDIVIDUAL_CLASS = "GPMotionIndividual"
@@ -53,8 +55,6 @@ def make_toolbox(task, family=None, *, evaluator=None, init_depth=(2, 6),
     fixed.  Note ``eaSimple`` does not re-score unchanged copies, so their
     costs may date from an earlier phase; ``GPSearch`` handles that.
     """
-    from ..inprocess import InProcessEvaluator
-    from ..families.gp import GPFamily
     if selection not in ("roulette", "tournament"):
         raise ValueError(f"selection must be 'roulette' or 'tournament', got {selection!r}")
     family = family or GPFamily(task)
@@ -102,7 +102,6 @@ def evaluate_population(toolbox_or_family, individuals: Sequence, progress: floa
     Accepts a toolbox from :func:`make_toolbox` (its evaluator) or a family
     (an in-process evaluator is built for ``family.task``).
     """
-    from ..inprocess import InProcessEvaluator
     ev = getattr(toolbox_or_family, "evaluator", None)
     if ev is None:
         fam = toolbox_or_family
