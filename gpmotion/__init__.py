@@ -26,7 +26,7 @@ def _mount_plugin_packages():
 _mount_plugin_packages()
 __version__ = "0.1.0"          # before the imports below: run.py records it
 
-from .check import check_primitive, check_task
+from .check import check_family, check_primitive, check_task
 from .evaluation import Evaluation
 from .evaluators import make_evaluator
 from .families import make_family
@@ -43,7 +43,7 @@ from .sim.rollout import Trajectory, rollout, simulate
 from .task import Ease, Task, Term, get_task, register_task, task_ids, task_names
 from . import compose  # composite motions: script language, composites, transition search, robust starts
 
-__all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task",
+__all__ = ["Ease", "Task", "Term", "check_family", "check_primitive", "check_task", "get_task", "register_task",
            "task_names", "task_ids", "STANDARD_PRIMITIVES", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
            "figure_names", "load_figure", "make_scene", "register_figure", "rollout", "simulate",
            "primitive", "load_plugins", "RunConfig", "run", "load_controller", "replay_genome",

@@ -179,7 +179,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
     _add_plugins_arg(p)
-    p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
+    p = sub.add_parser("check", help="run the public contract checks on every primitive, task "
+                       "and controller family")
     _add_plugins_arg(p)
     p.add_argument("--only-plugins", action="store_true",
                    help="check only what the --plugins folders add, not the built-ins")
@@ -534,25 +535,24 @@ def cmd_export(args):
 
 
 def cmd_check(args):
-    from .check import check_primitive, check_task
+    from .check import check_family, check_primitive, check_task
+    from .families import family_names
     from .gp import primitives
     from .task import task_ids
     if args.only_plugins and not args.plugins:
         raise ValueError("--only-plugins needs --plugins DIR")
     primitives.load_builtin()
-    prims_before, tasks_before = set(primitives.names()), set(task_ids())
+    before = set(primitives.names()) | set(task_ids()) | set(family_names())
     _activate_plugins(args)
-    prims, tasks = primitives.names(), task_ids()       # every version of every task
+    checks = ([("primitive", n, check_primitive) for n in primitives.names()]
+              + [("task", n, check_task) for n in task_ids()]       # every version of every task
+              + [("family", n, check_family) for n in family_names()])
     if args.only_plugins:
-        prims = [n for n in prims if n not in prims_before]
-        tasks = [n for n in tasks if n not in tasks_before]
-        if not prims and not tasks:
-            raise ValueError(f"{', '.join(args.plugins)}: no primitives or tasks to check")
-    bad = 0
-    for name in prims:
-        bad += _report(f"primitive {name}", check_primitive, name)
-    for name in tasks:
-        bad += _report(f"task {name}", check_task, name)
+        checks = [c for c in checks if c[1] not in before]
+        if not checks:
+            raise ValueError(f"{', '.join(args.plugins)}: no primitives, tasks or controller "
+                             "families to check")
+    bad = sum(_report(f"{kind} {name}", fn, name) for kind, name, fn in checks)
     return 1 if bad else 0
 
 
