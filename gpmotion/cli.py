@@ -227,9 +227,11 @@ def _evaluator_lost(e: BaseException) -> bool:
 def _input_error(e: BaseException) -> bool:
     """Errors that are the user's input, not a bug: a ValueError (our bad-input
     convention) or an unknown name (KeyError) raised by gpmotion's own code or
-    a plugin, a file the OS refuses, a lost worker or scheduler.  The same
-    types raised inside numpy, numba, DEAP or the standard library are bugs."""
-    if isinstance(e, OSError) or _evaluator_lost(e):
+    a plugin, a file the OS refuses, and our error types that carry an
+    ``exit_code`` (a lost worker or scheduler, the dask extra missing).  The
+    same types raised inside numpy, numba, DEAP or the standard library are
+    bugs, and so is every other type (TypeError, RuntimeError...)."""
+    if isinstance(e, OSError) or hasattr(type(e), "exit_code"):
         return True
     if not isinstance(e, (ValueError, KeyError)):
         return False

@@ -55,7 +55,7 @@ from .inprocess import InProcessEvaluator, evaluate_chunk, spec_of
 
 __all__ = ["ProcessPoolEvaluator", "DaskEvaluator", "make_evaluator", "check_scheduler",
            "chunk_bounds", "plan_chunk_size", "usable_workers", "WorkerLost", "SchedulerLost",
-           "DASK_MISSING", "EXIT_SCHEDULER_LOST"]
+           "DaskMissing", "DASK_MISSING", "EXIT_SCHEDULER_LOST"]
 
 DASK_MISSING = "the dask backend needs `pip install gpmotion[dask]`"
 
@@ -85,6 +85,12 @@ IDLE_POLL = 5.0
 
 class WorkerLost(RuntimeError):
     """Workers kept dying: the batch could not be finished within the retry budget."""
+    exit_code = 2
+
+
+class DaskMissing(ImportError):
+    """The dask backend is not installed (a setup problem: one line, exit 2)."""
+    exit_code = 2
 
 
 class SchedulerLost(RuntimeError):
@@ -405,7 +411,7 @@ def _import_distributed():
     try:
         import distributed
     except ImportError as e:                       # pragma: no cover - depends on the install
-        raise ImportError(DASK_MISSING) from e
+        raise DaskMissing(DASK_MISSING) from e
     return distributed
 
 
