@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gpmotion.task import Term
+from gpmotion.task import Task, Term
 
 FIGURE = "herman"
 ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "wrist_r_x")
@@ -29,7 +29,14 @@ ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "
 FINGERTIP = ("site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz")
 TERMINALS = (tuple(f"angle_{a}" for a in ARM) + tuple(f"rate_{a}" for a in ARM) + ("t",)
              + FINGERTIP)
-REST_WINDOW = 0.3          # s: "finishing at rest" looks at the fingertip over this tail
+REST_WINDOW = 0.3          # s: the style term "rest" looks at the fingertip over this tail
+# Success is judged on a motion that has come to rest: every Herman task
+# requires the fingertip's speed to stay below REST_SPEED over the last
+# SETTLE seconds (its largest speed there), so a finger swinging through
+# the target at the last frame does not count.  5 cm/s moves the fingertip
+# 5 mm over that window.
+REST_SPEED = 0.05          # m/s
+SETTLE = 0.1               # s
 
 
 # Cost scale: the GP's default roulette selects on 1/(1 + cost), so a cost
@@ -51,6 +58,28 @@ GP_DEFAULTS = {"population": 400, "generations": 50, "p_crossover": 0.85, "p_cre
 VIEW = {"elev": 10, "azim": -80, "ground": False,
         "bodies": ["pelvis", "torso", "head", "upper_arm_r", "forearm_r", "hand_r",
                    "upper_arm_l", "forearm_l", "hand_l"]}
+
+
+class HermanTask(Task):
+    """What every Herman task shares (issue 15: one block, not one copy per
+    task): the figure, the joints under GP and their senses, the GP budget,
+    the picture view, and success = the task's own ``reached`` test AND a
+    motion that has come to rest (``at_rest``).  A task overrides any of
+    these class attributes where it needs more of the body (its file says so).
+    Not registered: a base, not a task."""
+    figure = FIGURE
+    params = {"seconds": 1.5}
+    controlled = ARM
+    terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
+    view = VIEW
+
+    def reached(self, traj, m) -> np.ndarray:
+        """The task's own goal test per episode (without the rest rule)."""
+        raise NotImplementedError
+
+    def success(self, traj, m):
+        return self.reached(traj, m) & at_rest(m)
 
 
 def goal_scene(point):
@@ -140,11 +169,24 @@ def tail(traj, seconds):
 
 
 def style_measures(traj, rest: bool = True) -> dict[str, np.ndarray]:
+    """The style terms' raw values, and ``end_speed``: the fingertip's largest
+    speed over the last SETTLE s (m/s), which success compares with REST_SPEED."""
+    speed = site_speed(traj, "fingertip_r")
     out = {"through": through_torso(traj), "posture": posture(traj),
-           "energy": traj.energy.sum(axis=1)}
+           "energy": traj.energy.sum(axis=1),
+           "end_speed": speed[:, tail(traj, SETTLE)].max(axis=1)}
     if rest:
-        out["rest"] = site_speed(traj, "fingertip_r")[:, tail(traj, REST_WINDOW)].mean(axis=1)
+        out["rest"] = speed[:, tail(traj, REST_WINDOW)].mean(axis=1)
     return out
+
+
+def at_rest(m) -> np.ndarray:
+    """Per episode: has the motion come to rest (fingertip slower than REST_SPEED
+    throughout the last SETTLE s)?  Part of every Herman task's success."""
+    return m["end_speed"] < REST_SPEED
+
+
+REST_RULE = f"fingertip slower than {REST_SPEED * 100:.0f} cm/s over the last {SETTLE} s"
 
 
 # ---- posing Herman by hand (tests, examples): numpy forward kinematics -------

@@ -43,8 +43,8 @@ class HermanReachStanding(HermanTouchObject):
         out["balance"] = drift + fell
         return out
 
-    def success(self, traj, m):
-        return super().success(traj, m) & (m["balance"] < STEADY)
+    def reached(self, traj, m):
+        return super().reached(traj, m) & (m["balance"] < STEADY)
 
     def describe(self, traj, m):
         return super().describe(traj, m) + [f"pelvis moved {m['balance'][0] * 100:.1f} cm at most"]

@@ -9,11 +9,12 @@ from gpmotion.check import check_task
 from gpmotion.figures import load_spec
 from gpmotion.sim import geometry3d
 from gpmotion.task import get_task
-from gpmotion.tasks._herman import ARM, TERMINALS, pose_q, reach
+from gpmotion.tasks._herman import ARM, REST_SPEED, SETTLE, TERMINALS, HermanTask, pose_q, reach
 from gpmotion.tasks.herman_touch_object import PRESETS
 from gpmotion.tasks.herman_wave import count_passes
 
-HERMAN_TASKS = ("herman_point", "herman_touch_nose", "herman_touch_object", "herman_wave")
+HERMAN_TASKS = ("herman_point", "herman_touch", "herman_touch_nose", "herman_touch_object",
+                "herman_wave")
 SITES = ("nose", "head_top", "chest", "shoulder_r", "shoulder_l", "hand_r", "hand_l",
          "fingertip_r", "fingertip_l", "foot_r", "foot_l")
 
@@ -135,8 +136,8 @@ def test_touch_nose_main_term_is_zero_at_the_nose_and_large_at_neutral(herman):
     touching = _still(herman, pose_q(herman, **angles))
     neutral = _still(herman, herman.q_default)
     m_touch, m_neutral = task.measure(touching), task.measure(neutral)
-    assert m_touch["nose"][0] < 1e-3 and m_touch["nose_end"][0] < 1e-3
-    assert m_neutral["nose"][0] > 1.0                  # ~0.95 m away, + half of it again
+    assert m_touch["touch"][0] < 1e-3 and m_touch["touch_end"][0] < 1e-3
+    assert m_neutral["touch"][0] > 1.0                 # ~0.95 m away, + half of it again
     assert task.success(touching, m_touch)[0] and not task.success(neutral, m_neutral)[0]
     assert m_touch["through"][0] == 0.0 and m_touch["rest"][0] < 1e-9
 
@@ -245,3 +246,81 @@ def test_reach_standing_scores_balance_and_falls():
     fall = gpmotion.rollout(task.fig, task.scene(), hold, n_steps=task.n_steps, q0=q0)
     _, m, ok = task.score(fall)
     assert m["balance"][0] > 1.0 and not ok[0]                         # it fell: +1
+
+
+# ---------------------------------------------------------------- success at rest
+def _passing(fig, q_end, dq, seconds=1.0):
+    """A Trajectory moving at constant joint velocity dq that is at q_end on its last frame."""
+    tr = gpmotion.simulate(fig, seconds)
+    q = q_end + (tr.times - tr.times[-1])[:, None] * dq
+    return replace(tr, q=np.broadcast_to(q, tr.q.shape).copy(), qd=np.zeros_like(tr.qd),
+                   energy=np.zeros_like(tr.energy))
+
+
+def test_touch_succeeds_only_once_the_fingertip_has_come_to_rest(herman):
+    """A finger swinging through the nose on the last frame is not a touch."""
+    task = get_task("herman_touch_nose")
+    nose = _site(herman, herman.q_default, "nose")
+    angles, miss = reach(herman, "fingertip_r", nose, x0=[-1.0, 0.5, 0.0, 2.3, 0.0, 0.0])
+    q_touch = pose_q(herman, **angles)
+    dq = np.zeros_like(q_touch)
+    dq[herman.model.act_q[herman.actuator_names.index("elbow_r")]] = 1.0      # 1 rad/s
+    swinging = _passing(herman, q_touch, dq)
+    m = task.measure(swinging)
+    assert m["touch_end"][0] < 1e-3                       # on the nose at the last frame ...
+    assert m["end_speed"][0] > 5 * REST_SPEED              # ... passing at ~0.3 m/s
+    assert not task.success(swinging, m)[0]
+    creeping = _passing(herman, q_touch, dq * 0.5 * REST_SPEED / m["end_speed"][0])
+    m = task.measure(creeping)
+    assert m["end_speed"][0] < REST_SPEED and task.success(creeping, m)[0]
+
+
+@pytest.mark.parametrize("name", HERMAN_TASKS + ("herman_reach_standing",))
+def test_every_herman_task_requires_rest_and_shares_one_attribute_block(name):
+    cls = type(get_task(name))
+    assert issubclass(cls, HermanTask)
+    for attr in ("controlled", "terminals", "gp_defaults", "view", "success"):
+        assert attr not in vars(cls), f"{name} repeats {attr}: it belongs to HermanTask"
+    assert f"{REST_SPEED * 100:.0f} cm/s" in cls.success_threshold and f"{SETTLE} s" in cls.success_threshold
+
+
+# ---------------------------------------------------------------- touching any site
+def test_touch_any_site_reaches_the_knee_by_bending_at_the_waist(herman):
+    from gpmotion.tasks.herman_touch import WAIST, reach_site
+    task = get_task("herman_touch", site="knee_l")
+    assert tuple(task.controlled) == WAIST + ARM
+    assert {"angle_waist_y", "rate_waist_y"} <= set(task.terminal_names())
+    assert np.allclose(task.scene().goal3, _site(herman, herman.q_default, "knee_l"))
+    starts = [(-0.3, 0.0, -0.3, 0.3, 0.0, 0.0), (-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
+    assert reach_site(herman, "knee_l", ARM, starts) > 0.1                # the arm alone: short
+    assert reach_site(herman, "knee_l", WAIST + ARM,
+                      [(1.0, 0.2, 0.5) + s for s in starts]) < 0.005      # bending: reached
+    assert tuple(get_task("herman_touch", site="elbow_l").controlled) == ARM
+
+
+def test_touch_site_measures_the_distance_to_that_site(herman):
+    task = get_task("herman_touch", site="chest")
+    chest = _site(herman, herman.q_default, "chest")
+    angles, miss = reach(herman, "fingertip_r", chest + [0.02, 0.0, 0.0],
+                         x0=[-0.8, 0.3, 0.0, 1.5, 0.0, 0.0])
+    assert miss < 1e-3
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["touch_end"][0] == pytest.approx(0.02, abs=1e-3) and task.success(None, m)[0]
+    m = get_task("herman_touch", site="nose").measure(_still(herman, pose_q(herman, **angles)))
+    assert m["touch_end"][0] > 0.3 and not get_task("herman_touch").success(None, m)[0]
+
+
+@pytest.mark.parametrize("site, why", [("bogus", "unknown site"), ("hand_r", "right arm"),
+                                       ("foot_l", "fingertip reaches")])
+def test_touch_rejects_sites_it_cannot_touch(site, why):
+    with pytest.raises(ValueError, match=why):
+        get_task("herman_touch", site=site)
+
+
+def test_touch_bad_site_on_the_command_line_is_one_line_exit_2(capsys):
+    from gpmotion.cli import main
+    code = main(["run", "herman_touch", "--param", "site=foot_l", "--generations", "1",
+                 "--population", "4", "--quiet", "--no-artifacts", "--out", "/nonexistent/x"])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "foot_l" in err[0]
