@@ -94,14 +94,17 @@ def site_at_rest(fig, name) -> np.ndarray:
     return geometry3d.sites_world(fig, fig.q_default)[fig.site_names.index(name)]
 
 
-def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ...]:
+def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT,
+                rest_weight: float | None = None) -> tuple[Term, ...]:
     """The style points every Herman arm task shares, phased in after the main goal.
 
     Weights are for a main term worth ``scale`` per unit; at scale 10 (1 per
     10 cm): a hand inside the torso for the whole episode costs 15-30 cm of
     miss, 1° RMS of sway of the held joints 1.7 mm, 100 J of actuator work 2 cm
     (a plain PD step to the nose spends ~110 J), a fingertip still moving at
-    10 cm/s at the end 1 cm."""
+    10 cm/s over the last 0.3 s 3 cm (success needs it below REST_SPEED, so
+    the rest term weighs as much as a miss of the touch threshold; a task whose
+    threshold costs more gives its own ``rest_weight``, per m/s)."""
     terms = [
         Term("through", 0.15 * scale, phase=(0.1, 0.4),
              doc="hand/fingertip inside the torso: fraction of frames + depth/radius"),
@@ -110,7 +113,8 @@ def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ..
         Term("energy", 0.0002 * scale, phase=(0.5, 0.9), doc="actuator work over the episode (J)"),
     ]
     if rest:
-        terms.append(Term("rest", 0.1 * scale, phase=(0.2, 0.6),
+        terms.append(Term("rest", 0.3 * scale if rest_weight is None else rest_weight,
+                          phase=(0.2, 0.6),
                           doc=f"mean fingertip speed over the last {REST_WINDOW} s (m/s)"))
     return tuple(terms)
 

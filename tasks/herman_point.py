@@ -48,7 +48,8 @@ class HermanPoint(HermanTask):
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              Term("bent", WEIGHT, phase=(0.2, 0.5),
                   doc="mean 1 − shoulder–fingertip distance / straight-arm length, last third"),
-             *style_terms(scale=WEIGHT))
+             # still moving at 10 cm/s costs as much as the 8° aim threshold
+             *style_terms(scale=WEIGHT, rest_weight=WEIGHT * AIMED / 0.1))
     success_threshold = (f"mean pointing error over the last third below {np.degrees(AIMED):.0f}°, "
                          f"arm at least {100 * (1 - BENT):.0f} % extended; {REST_RULE}")
 
