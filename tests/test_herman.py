@@ -324,3 +324,20 @@ def test_touch_bad_site_on_the_command_line_is_one_line_exit_2(capsys):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "foot_l" in err[0]
+
+
+def test_reach_standing_force_senses_read_the_soles_ground_forces():
+    """--param forces=1: the four sole contact forces are terminals, and what the
+    controller reads is the ground's force (standing still: they carry the weight)."""
+    from gpmotion.controllers import schedule
+    from gpmotion.tasks.herman_reach_standing import FOOT_FORCES
+    plain, felt = get_task("herman_reach_standing"), get_task("herman_reach_standing", forces=1)
+    assert not set(FOOT_FORCES) & set(plain.terminal_names())
+    assert set(FOOT_FORCES) <= set(felt.terminal_names())
+    fig = felt.fig
+    tr = gpmotion.rollout(fig, felt.scene(), schedule.constant(fig.model.neutral), n_steps=500,
+                          record_senses=True)
+    total = sum(tr.sense(n)[0, -1] for n in FOOT_FORCES)
+    assert total == pytest.approx(fig.total_mass * 9.81, rel=0.02)
+    with pytest.raises(ValueError, match="forces"):
+        get_task("herman_reach_standing", forces=2)
