@@ -98,7 +98,7 @@ class HermanTouch(HermanTask):
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        site, f = self.site, self.fig
+        site, f = self.site, self.figure
         if site not in f.site_names:
             raise ValueError(f"{self.name}: unknown site {site!r}; sites: {', '.join(f.site_names)}")
         if f.link_names[f.site_link[f.site_names.index(site)]] in ARM:   # links named by joint
@@ -109,12 +109,12 @@ class HermanTouch(HermanTask):
 
     @property
     def site(self) -> str:
-        return str(self.p["site"])
+        return str(self.params["site"])
 
     def scene(self):
         # the senses' goal: the site at the neutral pose (the body around it is
         # PD-held, so it moves only a little)
-        return goal_scene(site_at_rest(self.fig, self.site))
+        return goal_scene(site_at_rest(self.figure, self.site))
 
     def measure(self, traj):
         d = fingertip_distance(traj, self.site)
