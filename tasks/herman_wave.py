@@ -60,8 +60,10 @@ def count_passes(y, ok, step=PASS):
 
 
 def wave_window(times):
-    """Frames [F] over which the wave is judged."""
-    return (times >= START * times[-1]) & (times <= times[-1] - STOP + 1e-9)
+    """Frames [F] over which the wave is judged (a short episode stops at most
+    half-way through the rest of it, so the window is never empty)."""
+    T = times[-1]
+    return (times >= START * T) & (times <= T - min(STOP, 0.5 * (1.0 - START) * T) + 1e-9)
 
 
 def wave_parts(traj):
