@@ -172,11 +172,12 @@ def tail(traj, seconds):
     return traj.times >= traj.times[-1] - seconds - 1e-9
 
 
-def style_measures(traj, rest: bool = True) -> dict[str, np.ndarray]:
+def style_measures(traj, rest: bool = True, controlled=ARM) -> dict[str, np.ndarray]:
     """The style terms' raw values, and ``end_speed``: the fingertip's largest
-    speed over the last SETTLE s (m/s), which success compares with REST_SPEED."""
+    speed over the last SETTLE s (m/s), which success compares with REST_SPEED.
+    ``controlled``: the joints under GP (posture watches the others)."""
     speed = site_speed(traj, "fingertip_r")
-    out = {"through": through_torso(traj), "posture": posture(traj),
+    out = {"through": through_torso(traj), "posture": posture(traj, controlled),
            "energy": traj.energy.sum(axis=1),
            "end_speed": speed[:, tail(traj, SETTLE)].max(axis=1)}
     if rest:

@@ -4,9 +4,10 @@ index fingertip (Gritz & Hahn's humanoid: "touching ... parts of the body").
 ``--param site=NAME`` names any site of the figure (``gpmotion show
 herman``: nose, chest, belly, shoulder_l, elbow_l, hand_l, thigh_l, knee_l,
 ...) except those on the right arm itself.  The GP drives the right arm; a
-site the arm alone cannot reach (the knees: the fingertip hangs 17-21 cm
-short of them) brings the waist under GP as well, so the trunk bends down
-to it (``controlled`` and ``terminals`` are chosen per site, below).  Every
+site on a leg (the knees: the fingertip hangs 17-21 cm short of them)
+brings the waist under GP as well, so the trunk bends down to it, and a
+site on the left arm brings the left arm under GP, so the hands meet
+(``controlled`` and ``terminals`` are chosen per site: ``joints_for``).  Every
 other joint holds its neutral pose with its PD servo, so the target moves
 only as much as the held body sways.
 
@@ -26,6 +27,7 @@ from gpmotion.tasks._herman import (ARM, MAIN_WEIGHT, REST_RULE, HermanTask, goa
 TOUCH = 0.03            # m: "touching"
 HOLD = 0.5              # s: the window of the averaged distance
 WAIST = ("waist_y", "waist_x", "waist_z")
+LEFT_ARM = ("shoulder_l_y", "shoulder_l_z", "shoulder_l_x", "elbow_l", "wrist_l_y", "wrist_l_x")
 LEG_LINKS = ("hip_", "knee_", "ankle_")     # links are named by their joint
 ARM_LENGTH = 0.77       # m: shoulder to fingertip, arm straight
 WAIST_TRAVEL = 0.50     # m: how far the shoulder moves as the waist bends 1.2 rad
@@ -60,21 +62,28 @@ def reach_site(fig, site, joints, starts):
 
 
 def joints_for(fig, site: str) -> tuple[str, ...]:
-    """The joints under GP for touching ``site``: the right arm, and the waist
-    as well for a site on a leg (the fingertip hangs 17-21 cm above the knees;
-    tests/test_herman.py checks with least squares that the arm alone falls
-    short and arm + waist reach).  ValueError for a site farther from the
-    shoulder than the arm (+ the shoulder's travel when the waist bends): a
-    quick necessary bound, not a proof that a site inside it is reachable."""
+    """The joints under GP for touching ``site``: the right arm; the waist as
+    well for a site on a leg (the fingertip hangs 17-21 cm above the knees);
+    both arms for a site on the left arm (the hands meet in front).
+    tests/test_herman.py checks with least squares that the right arm alone
+    falls short and these sets reach.  ValueError for a site farther from the
+    right shoulder than the arm (+ how far the target can come: the shoulder's
+    travel as the waist bends, the left arm's length): a quick necessary
+    bound, not a proof that a site inside it is reachable."""
     link = fig.link_names[fig.site_link[fig.site_names.index(site)]]
-    joints = WAIST + ARM if link.startswith(LEG_LINKS) else ARM
+    if link.startswith(LEG_LINKS):
+        joints, extra = WAIST + ARM, WAIST_TRAVEL
+    elif link in LEFT_ARM:
+        joints, extra = ARM + LEFT_ARM, ARM_LENGTH
+    else:
+        joints, extra = ARM, 0.0
     rest = geometry3d.sites_world(fig, fig.q_default)
     far = float(np.linalg.norm(rest[fig.site_names.index(site)]
                                - rest[fig.site_names.index("shoulder_r")]))
-    bound = ARM_LENGTH + (WAIST_TRAVEL if joints != ARM else 0.0)
+    bound = ARM_LENGTH + extra
     if far > bound:
         raise ValueError(f"herman_touch: site {site!r} is {far:.2f} m from the right shoulder; the "
-                         f"fingertip reaches {bound:.2f} m{' bending at the waist' if joints != ARM else ''}")
+                         f"fingertip reaches {bound:.2f} m{'' if joints == ARM else ' (' + ', '.join(joints[:3]) + ' ... under GP)'}")
     return joints
 
 
@@ -119,7 +128,7 @@ class HermanTouch(HermanTask):
     def measure(self, traj):
         d = fingertip_distance(traj, self.site)
         out = {"touch": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "touch_end": d[:, -1]}
-        out.update(style_measures(traj))
+        out.update(style_measures(traj, controlled=self.controlled))
         return out
 
     def reached(self, traj, m):

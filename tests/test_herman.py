@@ -295,7 +295,23 @@ def test_touch_any_site_reaches_the_knee_by_bending_at_the_waist(herman):
     assert reach_site(herman, "knee_l", ARM, starts) > 0.1                # the arm alone: short
     assert reach_site(herman, "knee_l", WAIST + ARM,
                       [(1.0, 0.2, 0.5) + s for s in starts]) < 0.005      # bending: reached
-    assert tuple(get_task("herman_touch", site="elbow_l").controlled) == ARM
+    assert tuple(get_task("herman_touch", site="belly").controlled) == ARM
+
+
+def test_touch_a_left_arm_site_brings_both_arms_under_gp(herman):
+    from gpmotion.tasks.herman_touch import LEFT_ARM, reach_site
+    task = get_task("herman_touch", site="hand_l")
+    assert tuple(task.controlled) == ARM + LEFT_ARM
+    assert {"angle_elbow_l", "rate_shoulder_l_x"} <= set(task.terminal_names())
+    right = [(-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
+    assert reach_site(herman, "hand_l", ARM, right) > 0.02                # the left hand hangs
+    assert reach_site(herman, "hand_l", ARM + LEFT_ARM,
+                      [r + (-0.8, -0.3, 0.0, 1.5, 0.0, 0.0) for r in right]) < 0.005
+    # posture watches only the PD-held joints: moving the left arm costs nothing
+    q = pose_q(herman, shoulder_l_y=-0.8, elbow_l=1.5)
+    m = task.measure(_still(herman, q))
+    assert m["posture"][0] < 1e-3
+    assert get_task("herman_touch", site="belly").measure(_still(herman, q))["posture"][0] > 0.1
 
 
 def test_touch_site_measures_the_distance_to_that_site(herman):
