@@ -245,7 +245,7 @@ def normalize(robust: dict | None, task) -> dict:
     if out["aggregate"] not in AGGREGATES:
         raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)}, "
                          f"got {out['aggregate']!r}")
-    default = asdict(sizes_for(task.figure))
+    default = asdict(sizes_for(type(task).figure))
     for k in SIZE_KEYS:
         v = robust.get(k, default[k])
         out[k] = float(validate_number(f"--perturb {k}", v, lo=0, hi=10.0))
