@@ -357,3 +357,47 @@ def test_reach_standing_force_senses_read_the_soles_ground_forces():
     assert total == pytest.approx(fig.total_mass * 9.81, rel=0.02)
     with pytest.raises(ValueError, match="forces"):
         get_task("herman_reach_standing", forces=2)
+
+
+# ---------------------------------------------------------------- holding an object
+def _gravity_torque(fig, q, joint):
+    """Torque (N·m) of gravity about a hinge's axis on everything beyond it, at q."""
+    m = fig.model
+    R, P = geometry3d.link_frames(m, q)
+    j = fig.link_names.index(joint)
+
+    def beyond(k):
+        while k >= 0:
+            if k == j:
+                return True
+            k = int(m.parent[k])
+        return False
+
+    axis = R[j] @ m.axis[j]
+    return sum(np.cross(P[k] + R[k] @ m.com[k] - P[j], [0.0, 0.0, -9.81 * m.mass[k]]) @ axis
+               for k in range(len(m.parent)) if beyond(k))
+
+
+def test_a_held_ball_adds_its_weight_times_its_lever_to_the_shoulder_torque():
+    """herman_holding: a 1 kg ball welded at the right fingertip.  Holding the
+    arm straight out in front, the shoulder servo's static torque balances
+    gravity on the arm and ball, and the ball's share is m·g·(horizontal
+    lever from the shoulder) -- the welded body joined the hand's link."""
+    from gpmotion.controllers import schedule
+    plain, holding = gpmotion.load_figure("herman"), gpmotion.load_figure("herman_holding")
+    assert holding.total_mass == pytest.approx(plain.total_mass + 1.0)
+    m = holding.model
+    target = m.neutral.copy()
+    a = holding.actuator_names.index("shoulder_r_y")
+    target[a], target[holding.actuator_names.index("elbow_r")] = -np.pi / 2, 0.0   # arm out front
+    tr = gpmotion.rollout(holding, gpmotion.make_scene(), schedule.constant(target), n_steps=4000)
+    q, qd = tr.q[0, -1], tr.qd[0, -1]
+    assert np.abs(qd).max() < 1e-4                                          # at rest
+    servo = m.kp[a] * (target[a] - q[m.act_q[a]])                           # PD torque at rest
+    assert servo + _gravity_torque(holding, q, "shoulder_r_y") == pytest.approx(0.0, abs=1e-3)
+    tip = _site(holding, q, "fingertip_r")
+    shoulder = _site(holding, q, "shoulder_r")
+    ball = 1.0 * 9.81 * (tip[0] - shoulder[0])                              # m·g·lever, ~7.5 N·m
+    assert ball > 7.0
+    arm = _gravity_torque(plain, q, "shoulder_r_y")                          # same pose, no ball
+    assert -servo == pytest.approx(arm + ball, rel=1e-4)
