@@ -96,8 +96,8 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     run_dir = Path(out) / "runs" / f"{name}-seed{seed}-{budget}"
     resumed = (run_dir / "config.json").exists()
     c0 = time.process_time()
-    genome, _, _ = run(None if resumed else cfg, run_dir, resume=resumed, quiet=True,
-                       artifacts=False)
+    # on resume the recorded run must be this configuration (else one-line error)
+    genome, _, _ = run(cfg, run_dir, resume=resumed, quiet=True, artifacts=False)
     cpu = time.process_time() - c0
     log = list(csv.DictReader(open(run_dir / "log.csv", newline="")))
     task = get_task(task_name, **params)
@@ -123,12 +123,26 @@ def _job(args):
     return run_one(*args)
 
 
+def current(rec: dict) -> bool:
+    """Was this record run with its configuration as CONFIGS now defines it?"""
+    if rec.get("config") not in CONFIGS:
+        return False
+    task, family, params, options = CONFIGS[rec["config"]][:4]
+    return (rec["task"].split("-v")[0] == task and rec["family"] == family
+            and all(rec["params"].get(k) == v for k, v in params.items())
+            and all(rec["options"].get(k) == v for k, v in options.items()))
+
+
 def load_results(out: Path) -> dict:
-    """Every finished run in ``out``: {(config, seed, budget): record}."""
+    """Every finished run in ``out`` of a configuration as now defined:
+    {(config, seed, budget): record}; others are named on stderr and skipped."""
     done = {}
     for p in sorted(out.glob("*-seed*-*.json")):
         rec = json.loads(p.read_text())
-        done[(rec["config"], rec["seed"], rec["budget"])] = rec
+        if current(rec):
+            done[(rec["config"], rec["seed"], rec["budget"])] = rec
+        else:
+            print(f"auslander_2d: {p} was run with other settings; skipped", file=sys.stderr)
     return done
 
 
@@ -235,6 +249,8 @@ def main(argv=None):
     except KeyboardInterrupt:          # the run loop checkpointed (Ctrl-C / SIGTERM)
         print("auslander_2d: stopped; the same command resumes", file=sys.stderr)
         sys.exit(130)
+    except ValueError as e:            # e.g. a run folder recorded with other settings
+        _fail(f"{e} (use another --out for changed settings)")
     chosen = pick(results, names, seeds, args.budget)
     print(f"\nup to {args.budget:,} evaluations per run, seeds {seeds[0]}..{seeds[-1]}\n")
     print(table(chosen, names, seeds))
