@@ -6,12 +6,17 @@ reseeding every 200 rounds) for ``--budget`` evaluations (default 40,000 =
 C × G with G = 4,000), kinematic actuation (the paper's τ-law), then the
 best controller's motion is classified by :mod:`gpmotion.gaits`.  Prints a
 table of gait counts per configuration (and the distance travelled), writes
-one filmstrip per gait found to ``--docs`` and every run's best controller
-and features to ``--out`` (``results.jsonl``: finished runs are skipped when
-the command is repeated, so an interrupted study resumes).
+one filmstrip per gait found to ``--docs``.  Every run is a run folder
+(``OUT/runs/NAME-seedS-BUDGET``, checkpointed every 10 s by the run loop)
+and, once finished, a result file (``OUT/NAME-seedS-BUDGET.json``, with the
+best controller): the same command skips finished runs and resumes cut ones
+where they stopped, so partial progress is never lost.  The table counts,
+per configuration and seed, the run at ``--budget`` or else the largest
+smaller budget finished, and names the budgets it counted.
 
     python benchmarks/auslander_2d.py [--seeds 5] [--budget 40000]
         [--configs star-contact,beryl-tumble] [--workers 2] [--out DIR] [--docs DIR]
+        [--table-only]
 
 Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-sense      Star-Man, sense-based, R = 10, unguided   [shuffle, Figs. 9-10]
@@ -19,7 +24,7 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-contact    + contact_distance                        [shuffle]
   star-rotations  + rotations                               [cartwheel]
   star-height     + max_height                              [hop]
-  beryl-tumble    Beryl, time-based, t_per = T, + rotations              [tumble, Fig. 11]
+  beryl-tumble    Beryl, time-based, t_per = T, + rotations (w 4)        [tumble, Fig. 11]
   beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
