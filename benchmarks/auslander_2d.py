@@ -53,20 +53,21 @@ CONFIGS = {
                    "Star-Man sense-based R=10, unguided"),
     "star-time": ("starman_travel", "bsr-time", {}, {}, (), "Star-Man time-based, unguided"),
     "star-contact": ("starman_travel", "bsr-time", {"w_contact_distance": 2.0}, {},
-                     ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance"),
+                     ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 2)"),
     "star-rotations": ("starman_travel", "bsr-time", {"w_rotations": 0.5}, {}, ("cartwheel",),
-                       "Star-Man time-based + rotations"),
+                       "Star-Man time-based + rotations (w 0.5)"),
     "star-height": ("starman_travel", "bsr-time", {"w_max_height": 2.0}, {}, ("hop",),
-                    "Star-Man time-based + max_height"),
+                    "Star-Man time-based + max_height (w 2)"),
     # Beryl: τ ≥ 0.2 s (bsr_dt 0.1), footnote 2's remedy for excessive torque;
     # with τ ≥ 0.1 s its kinematic legs hopped 4-6 m in 3 s at weights 0.5 and 2.
     # Rotations weight 4: at 2 a 5.5 m hop that falls 0.88 turns forward beat a
     # tumble (seed 0, 10,000 evaluations); at 4 the same seed tumbles (1.11 turns)
     "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 4.0}, {"bsr_dt": 0.1}, ("tumble",),
-                     "Beryl time-based, t_per = T, + rotations"),
+                     "Beryl time-based, t_per = T, + rotations (w 4), τ ≥ 0.2 s"),
     "beryl-periodic": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
                        {"t_per": 0.5, "bsr_dt": 0.1},
-                       ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, + contact_distance"),
+                       ("periodic shuffle",),
+                       "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s"),
     # the paper's Beryl configurations name no secondary term; unguided, ours hops
     "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
                               "Beryl time-based, t_per = T, unguided"),
