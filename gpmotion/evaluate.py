@@ -57,7 +57,7 @@ class InProcessEvaluator:
 
     def rollout(self, genomes, record_senses=False, progress: float = 1.0):
         batch = self.family.encode(genomes)
-        return rollout(self.task.fig, self.scene(progress), batch, n_steps=self.task.n_steps,
+        return rollout(self.task.figure, self.scene(progress), batch, n_steps=self.task.n_steps,
                        q0=self._q0, qd0=self._qd0, dt=self.task.dt,
                        record_every=self.task.record_every, actuation=self.actuation,
                        default_tau=self.family.default_tau,
@@ -112,7 +112,7 @@ def spec_of(task: Task, family: Family, actuation: str, plugins=(), robust=None)
     never folder paths.
     """
     from .plugins import for_record
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation,
             "plugins": [{k: v for k, v in r.items() if k != "path"} for r in for_record(plugins)],
             "code": code_digest(), **({"robust": dict(robust)} if robust else {})}

@@ -29,7 +29,7 @@ from .rundir import RunDir
 from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
                         search_settings, settings_mismatch)
 from .search.adapters import make_search
-from .task import Task, get_task
+from .task import Task, get_task, task_id
 
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
@@ -227,6 +227,9 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
     try:
         if resume:
             rd, cfg, doc = _open_resume(out)
+            cfg.task = task_id(cfg.task, recorded=True)      # bare: recorded before ids, its v1
+            if given is not None and given.task in (cfg.task, cfg.task.rsplit("-v", 1)[0]):
+                given.task = cfg.task                        # the bare name of the recorded task
             task, family, search, actuation = build(cfg)
             if given is not None:
                 check_resume_request(given, cfg, doc, search, rd.path)
@@ -240,6 +243,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                 search.extend(doc["extended_generations"], search.schedule)
         else:       # validate everything (the scheduler too) before touching the disk
             task, family, search, actuation = build(cfg)
+            cfg.task = task.id                                # records store the versioned id
             evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd = RunDir.create(out, force=force)
             from .plugins import for_record
@@ -465,7 +469,7 @@ def _versions():
 
 def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cost) -> dict:
     """The safe-JSON controller file (best.json, or a user's controller)."""
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation, "plugins": list(cfg.plugins),
             "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
 
@@ -495,7 +499,7 @@ def write_artifacts(rd: RunDir, task, family, genome, traj):
 
 def plot_gp_trees(path, task, family, genome):
     from .treeplot import plot_trees
-    names = [task.fig.actuator_names[i] for i in family.actuators]
+    names = [task.figure.actuator_names[i] for i in family.actuators]
     plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 

@@ -187,7 +187,7 @@ def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
                    getattr(stored, k), getattr(given, k))
     if given.params:
         from .task import get_task
-        now = get_task(given.task, **given.params).p
+        now = get_task(given.task, **given.params).params
         rec = (doc.get("task_config") or {}).get("params") or {}
         for k in given.params:
             if not _same(now.get(k), rec.get(k)):

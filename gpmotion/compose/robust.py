@@ -193,8 +193,8 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
     The starts depend on (seed, round_) only: the same for every backend and after a resume.
     """
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, k, round_rng(seed, round_), sizes)
-    traj = robust_rollout(task.fig, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, k, round_rng(seed, round_), sizes)
+    traj = robust_rollout(task.figure, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation or family.default_actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
@@ -210,13 +210,13 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
     does as evolved); the other trials are drawn from ``trial_rng(seed)``, a
     stream no run's training starts come from.  ``sizes`` default: the figure's.
     """
-    sizes = sizes_for(task.figure) if sizes is None else sizes
+    sizes = sizes_for(type(task).figure) if sizes is None else sizes
     if not 1 <= trials <= 100_000:
         raise ValueError(f"trials must be in 1..100000, got {trials}")
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, trials, trial_rng(seed), sizes)
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, trial_rng(seed), sizes)
     q0s[0], qd0s[0] = q0, qd0
-    traj = robust_rollout(task.fig, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
+    traj = robust_rollout(task.figure, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
@@ -252,7 +252,7 @@ def normalize(robust: dict | None, task) -> dict:
     if out["aggregate"] not in AGGREGATES:
         raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)}, "
                          f"got {out['aggregate']!r}")
-    default = asdict(sizes_for(task.figure))
+    default = asdict(sizes_for(type(task).figure))
     for k in SIZE_KEYS:
         v = robust.get(k, default[k])
         out[k] = float(validate_number(f"--perturb {k}", v, lo=0, hi=10.0))
@@ -278,9 +278,9 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     from ..evaluate import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
-    q0s, qd0s = perturbed_starts(task.fig, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
+    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
                                  sizes_of(r))
-    traj = robust_rollout(task.fig, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
+    traj = robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=ev.actuation, default_tau=fam.default_tau,
                           record_senses=fam.needs_senses, threads=ev.threads)

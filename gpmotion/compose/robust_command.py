@@ -31,7 +31,7 @@ def run_command(args) -> int:
     from .robust import SIZE_KEYS, Perturbation, robustness, sizes_for
     task, family, actuation, genome, _ = load_controller(args.source)
     given = {k: getattr(args, k) for k in SIZE_KEYS if getattr(args, k) is not None}
-    sizes = Perturbation(**{**asdict(sizes_for(task.figure)), **given})
+    sizes = Perturbation(**{**asdict(sizes_for(type(task).figure)), **given})
     r = robustness(task, family, actuation, genome, trials=args.trials, seed=args.seed, sizes=sizes)
     if args.json:
         print(json.dumps(r))
