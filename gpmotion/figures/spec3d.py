@@ -354,10 +354,10 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     mass = np.zeros(nl)
     com = np.zeros((nl, 3))
     icom = np.zeros((nl, 3, 3))
-    for name, b in bodies.items():        # welded bodies add up on their link
-        i = body_link[name]
+    for bname, b in bodies.items():       # welded bodies add up on their link
+        i = body_link[bname]
         if i >= 0:
-            Rb, tb = in_link.get(name, (eye, np.zeros(3)))
+            Rb, tb = in_link.get(bname, (eye, np.zeros(3)))
             mass[i], com[i], icom[i] = _combine(mass[i], com[i], icom[i], b["mass"],
                                                 tb + Rb @ b["com"], Rb @ b["inertia"] @ Rb.T)
     lo, hi, damping = np.full(nv, -np.inf), np.full(nv, np.inf), np.zeros(nv)
