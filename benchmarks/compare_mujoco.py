@@ -337,7 +337,7 @@ def compare_lamp_gp(episodes, repeats, threads, py_episodes, seed=0, seconds=Non
     from gpmotion.gp.pset import compile_reference
 
     task, fam, tokens = bench_gp_trees(seed)
-    fig, scene = task.fig, task.scene()
+    fig, scene = task.figure, task.scene()
     dt = task.dt
     n_steps = int(round((seconds or task.seconds) / dt))
     q0, qd0 = task.initial_state()

@@ -65,15 +65,15 @@ class CreatureTask(Task):
     _start = None
 
     def validate(self):
-        after = self.p.get("after", "")
+        after = self.params.get("after", "")
         if not isinstance(after, str):
             raise ValueError(f"task {self.name}: after must be a comma-separated list of controller files")
 
     def initial_state(self):
-        if not self.p.get("after"):
+        if not self.params.get("after"):
             return super().initial_state()
         if self._start is None:
-            self._start = stage_end([s.strip() for s in self.p["after"].split(",") if s.strip()])
+            self._start = stage_end([s.strip() for s in self.params["after"].split(",") if s.strip()])
         q, qd = self._start
         return q.copy(), qd.copy()
 
@@ -84,7 +84,7 @@ class CreatureTask(Task):
         """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):
         com height and vertical velocity, the root's velocity, angular velocity
         and up axis, every contact force, the driven joints' angles, and time."""
-        fig = self.fig
+        fig = self.figure
         body = ["com_z", "vx", "vy", "com_vz", "wx", "wy", "wz", "up_x", "up_y", "up_z", "t"]
         return (body + [f"force_{c}" for c in fig.contact_names]
                 + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])

@@ -40,10 +40,10 @@ class BobWalk(CreatureTask):
 
     def validate(self):
         super().validate()
-        self.terms = bob_terms(self.p)
+        self.terms = bob_terms(self.params)
 
     def success(self, traj, m):
-        return m["steps"] >= self.p["success_steps"]
+        return m["steps"] >= self.params["success_steps"]
 
     def describe(self, traj, m, e=0):
         return [f"{int(m['steps'][e])} forward steps, forward {m['distance'][e]:.2f} m, "

@@ -39,7 +39,7 @@ class CujoTravel(CreatureTask):
 
     def validate(self):
         super().validate()
-        self.terms = (self.terms[0], Term("fall", float(self.p["w_fall"]), doc=self.terms[1].doc))
+        self.terms = (self.terms[0], Term("fall", float(self.params["w_fall"]), doc=self.terms[1].doc))
 
     def measure(self, traj):
         m = super().measure(traj)
@@ -47,7 +47,7 @@ class CujoTravel(CreatureTask):
         return m
 
     def success(self, traj, m):
-        return (m["distance"] >= self.p["success_distance"]) & (m["fell"] == 0)
+        return (m["distance"] >= self.params["success_distance"]) & (m["fell"] == 0)
 
     def describe(self, traj, m, e=0):
         return [f"forward {m['distance'][e]:.2f} m ({m['distance'][e] / BODY_LENGTH:.1f} body lengths), "

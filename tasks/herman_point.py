@@ -59,24 +59,24 @@ class HermanPoint(Task):
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        f = self.fig
+        f = self.figure
         straight = geometry3d.sites_world(f, pose_q(f, elbow_r=0.0))
         self.arm_length = float(np.linalg.norm(straight[f.site_names.index("fingertip_r")]
                                                - straight[f.site_names.index("shoulder_r")]))
 
     def validate(self):
-        if not -180.0 <= self.p["azimuth"] <= 180.0:
-            raise ValueError(f"herman_point: azimuth must be within -180..180 degrees, got {self.p['azimuth']}")
-        if not -90.0 <= self.p["elevation"] <= 90.0:
-            raise ValueError(f"herman_point: elevation must be within -90..90 degrees, got {self.p['elevation']}")
+        if not -180.0 <= self.params["azimuth"] <= 180.0:
+            raise ValueError(f"herman_point: azimuth must be within -180..180 degrees, got {self.params['azimuth']}")
+        if not -90.0 <= self.params["elevation"] <= 90.0:
+            raise ValueError(f"herman_point: elevation must be within -90..90 degrees, got {self.params['elevation']}")
 
     @property
     def target_dir(self):
-        return direction(self.p["azimuth"], self.p["elevation"])
+        return direction(self.params["azimuth"], self.params["elevation"])
 
     def scene(self):
         # senses: fingertip − a point GOAL_REACH along the direction from the shoulder
-        return goal_scene(site_at_rest(self.fig, "shoulder_r") + GOAL_REACH * self.target_dir)
+        return goal_scene(site_at_rest(self.figure, "shoulder_r") + GOAL_REACH * self.target_dir)
 
     def measure(self, traj):
         err = pointing_error(traj, self.target_dir)
@@ -95,5 +95,5 @@ class HermanPoint(Task):
         az = np.degrees(np.arctan2(v[1], v[0]))
         el = np.degrees(np.arctan2(v[2], np.hypot(v[0], v[1])))
         return [f"pointing error {np.degrees(m['aim'][0]):.1f}° over the last third "
-                f"(target az {self.p['azimuth']:.0f}°, el {self.p['elevation']:.0f}°)",
+                f"(target az {self.params['azimuth']:.0f}°, el {self.params['elevation']:.0f}°)",
                 f"arm at the end: az {az:.0f}°, el {el:.0f}°, reach {np.linalg.norm(v):.2f} m"]

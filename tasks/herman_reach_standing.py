@@ -32,7 +32,7 @@ class HermanReachStanding(HermanTouchObject):
     def scene(self):
         # herman_standing's own ground (its TOML's [ground]): stiff enough for 70 kg
         goal = self.object_position()
-        return make_scene(goal=tuple(float(v) for v in goal), **self.fig.ground)
+        return make_scene(goal=tuple(float(v) for v in goal), **self.figure.ground)
 
     def measure(self, traj):
         out = super().measure(traj)

@@ -41,7 +41,7 @@ class HermanTouchNose(Task):
     def scene(self):
         # the senses' goal: the nose at the neutral pose (the head is PD-held,
         # so it moves only a little)
-        return goal_scene(site_at_rest(self.fig, "nose"))
+        return goal_scene(site_at_rest(self.figure, "nose"))
 
     def measure(self, traj):
         d = fingertip_distance(traj, "nose")

@@ -46,20 +46,20 @@ class HermanTouchObject(Task):
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"
 
     def validate(self):
-        t = self.p["target"]
+        t = self.params["target"]
         if t not in (-1.0, 0.0, 1.0, 2.0):
             raise ValueError(f"herman_touch_object: target must be -1 (use x, y, z) or a preset "
                              f"0, 1, 2, got {t}")
 
     def object_position(self) -> np.ndarray:
         """World position of the object."""
-        t = int(self.p["target"])
-        rel = np.array(PRESETS[t] if t >= 0 else (self.p["x"], self.p["y"], self.p["z"]), float)
-        return self.fig.model.fixed_pos + self.fig.model.fixed_rot @ rel
+        t = int(self.params["target"])
+        rel = np.array(PRESETS[t] if t >= 0 else (self.params["x"], self.params["y"], self.params["z"]), float)
+        return self.figure.model.fixed_pos + self.figure.model.fixed_rot @ rel
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        f = self.fig
+        f = self.figure
         shoulder = geometry3d.sites_world(f, f.q_default)[f.site_names.index("shoulder_r")]
         d = float(np.linalg.norm(self.object_position() - shoulder))
         if d > REACH:
@@ -82,7 +82,7 @@ class HermanTouchObject(Task):
         d = np.linalg.norm(traj.site("fingertip_r")[0] - self.object_position(), axis=-1)
         near = d < TOUCH
         first = f"{traj.times[near.argmax()]:.2f} s" if near.any() else "never"
-        rel = self.object_position() - self.fig.model.fixed_pos
+        rel = self.object_position() - self.figure.model.fixed_pos
         return [f"object at ({rel[0]:.2f}, {rel[1]:.2f}, {rel[2]:.2f}) m from the pelvis: "
                 f"fingertip {d[-1] * 100:.1f} cm away at the end; first touch {first}",
                 f"fingertip speed at the end {m['rest'][0] * 100:.1f} cm/s"]

@@ -87,7 +87,7 @@ class HermanWave(Task):
 
     def scene(self):
         # senses: fingertip − a point above and a little outside the right shoulder
-        return goal_scene(site_at_rest(self.fig, "shoulder_r") + np.array(WAVE_AT))
+        return goal_scene(site_at_rest(self.figure, "shoulder_r") + np.array(WAVE_AT))
 
     def measure(self, traj):
         p = wave_parts(traj)

@@ -37,10 +37,10 @@ class RexTurn(CreatureTask):
 
     def validate(self):
         super().validate()
-        self.terms = turn_terms(self.p)
+        self.terms = turn_terms(self.params)
 
     def success(self, traj, m):
-        return (m["turn"] >= np.radians(self.p["success_degrees"])) & (m["fall"] == 0)
+        return (m["turn"] >= np.radians(self.params["success_degrees"])) & (m["fall"] == 0)
 
     def describe(self, traj, m, e=0):
         return [f"heading change {np.degrees(m['turn'][e]):.0f}°, forward {m['distance'][e]:.2f} m, "

@@ -38,10 +38,10 @@ class RexWalk(CreatureTask):
 
     def validate(self):
         super().validate()
-        self.terms = walk_terms(self.p)
+        self.terms = walk_terms(self.params)
 
     def success(self, traj, m):
-        return (m["distance"] >= self.p["success_distance"]) & (m["fall"] == 0)
+        return (m["distance"] >= self.params["success_distance"]) & (m["fall"] == 0)
 
     def describe(self, traj, m, e=0):
         return [f"forward {m['distance'][e]:.2f} m, sideways {m['sideways'][e]:.2f} m, "

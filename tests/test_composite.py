@@ -21,7 +21,7 @@ def write_controller(path, family="gp", task="starman_travel", seconds=1.0, seed
         genome = f.from_json({"kind": "gp", "pset": f.info.hash, "trees": GP_TREES})
     else:
         genome = f.random(np.random.default_rng(seed))
-    rec = {"task": t.name, "params": dict(t.p), "family": family, "options": dict(f.options),
+    rec = {"task": t.name, "params": dict(t.params), "family": family, "options": dict(f.options),
            "actuation": f.default_actuation, "genome": f.to_json(genome)}
     atomic_write_json(path, envelope("best", rec))
     return path

@@ -145,7 +145,7 @@ def test_rex_time_based_controller_has_47_free_variables():
     task = gpmotion.get_task("rex_walk")
     fam = gpmotion.families.make_family("bsr-time", task, rules=4, segments="variable")
     g = fam.random(np.random.default_rng(0))
-    N, R = n_rods(task.fig), 4
+    N, R = n_rods(task.figure), 4
     assert 2 * N * R - 1 == 119
     assert (R - 1) + (2 * N - 2) * R + R == 119
     assert g.n_parameters == 47
@@ -158,10 +158,10 @@ def test_3d_sense_based_rule_size():
     for name, task in (("bob", "bob_walk"), ("rex", "rex_walk")):
         t = gpmotion.get_task(task)
         fam = gpmotion.families.make_family("bsr-sense", t, rules=10)
-        V = 10 + len(t.fig.contact_names) + len(t.fig.actuator_names)
+        V = 10 + len(t.figure.contact_names) + len(t.figure.actuator_names)
         assert fam.senses3d.plan.n_senses == V
         g = fam.random(np.random.default_rng(0))
-        assert g.n_parameters == 10 * (2 * V + len(t.fig.actuator_names) + 1)
+        assert g.n_parameters == 10 * (2 * V + len(t.figure.actuator_names) + 1)
 
 
 # ---------------------------------------------------------------- the filter

@@ -123,7 +123,7 @@ def test_herman_task_passes_check_task(name):
 @pytest.mark.parametrize("name", HERMAN_TASKS)
 def test_herman_tasks_drive_only_the_right_arm(name):
     t = get_task(name)
-    assert t.figure == "herman" and tuple(t.controlled) == ARM
+    assert t.figure.name == "herman" and tuple(t.controlled) == ARM
     assert t.success_threshold and 1.0 <= t.seconds <= 3.0
 
 
@@ -234,14 +234,14 @@ def test_herman_task_goals_are_their_targets(herman):
 def test_reach_standing_scores_balance_and_falls():
     from gpmotion.controllers import schedule
     task = get_task("herman_reach_standing", seconds=1.0)
-    assert task.fig.model.jtype[0] == 2                                # a free pelvis
-    hold = schedule.constant(task.fig.model.neutral)
-    still = gpmotion.rollout(task.fig, task.scene(), hold, n_steps=task.n_steps)
+    assert task.figure.model.jtype[0] == 2                                # a free pelvis
+    hold = schedule.constant(task.figure.model.neutral)
+    still = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps)
     _, m, _ = task.score(still)
     assert m["balance"][0] < 0.01                                      # stands where it stood
-    q0 = task.fig.q_default.copy()
+    q0 = task.figure.q_default.copy()
     q0[3:7] = [np.cos(0.3), 0.0, np.sin(0.3), 0.0]                     # leaning 0.6 rad forward
     q0[2] += 0.2
-    fall = gpmotion.rollout(task.fig, task.scene(), hold, n_steps=task.n_steps, q0=q0)
+    fall = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps, q0=q0)
     _, m, ok = task.score(fall)
     assert m["balance"][0] > 1.0 and not ok[0]                         # it fell: +1

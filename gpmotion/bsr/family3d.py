@@ -35,7 +35,7 @@ class Senses3D:
 
 def use_3d_senses(family, filter_tau: float = senses3d.FILTER_TAU) -> None:
     task = family.task
-    plan = senses3d.sense_plan(task.fig, family.actuators, task.record_every, task.dt, filter_tau)
+    plan = senses3d.sense_plan(task.figure, family.actuators, task.record_every, task.dt, filter_tau)
     helper = Senses3D(plan, family.actuators)
     family.senses3d = helper
     family.sense_indices = np.arange(plan.n_senses)        # V stimulus columns

@@ -70,7 +70,7 @@ class Composite:
 
     @property
     def figure(self):
-        return self.parts[0].task.fig
+        return self.parts[0].task.figure
 
     @property
     def dt(self) -> float:
@@ -106,9 +106,9 @@ class Composite:
 def _check_parts(parts: list[Part]) -> None:
     first = parts[0].task
     for p in parts[1:]:
-        if p.task.fig.name != first.fig.name:
-            raise CompositeError(f"phase {p.name!r} controls figure {p.task.fig.name!r}, "
-                                 f"phase {parts[0].name!r} {first.fig.name!r}: one composite, one figure")
+        if p.task.figure.name != first.figure.name:
+            raise CompositeError(f"phase {p.name!r} controls figure {p.task.figure.name!r}, "
+                                 f"phase {parts[0].name!r} {first.figure.name!r}: one composite, one figure")
         if p.task.dt != first.dt:
             raise CompositeError(f"phase {p.name!r} runs at dt {p.task.dt}, phase {parts[0].name!r} at {first.dt}")
 
