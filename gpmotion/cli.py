@@ -76,6 +76,8 @@ def _add_run_args(p):
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
     add_arguments(p)
+    from .compose.robust import add_run_arguments        # --robust-starts K, --perturb ...
+    add_run_arguments(p)
 
 
 def _add_plugins_arg(p):
@@ -268,6 +270,8 @@ def _run_configs(args):
     validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
     search, fam = collect(args, args.controller)
+    from .compose.robust import run_setting
+    robust = run_setting(args)
     if args.preset:
         from .gp.presets import apply_preset
         fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
@@ -285,7 +289,7 @@ def _run_configs(args):
                             family_options=dict(fam), search=dict(search),
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
-                            plugins=list(plugins)), name
+                            plugins=list(plugins), robust=dict(robust)), name
 
 
 def _figure_variant(task_name, path):

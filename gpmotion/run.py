@@ -55,6 +55,8 @@ def build(cfg: RunConfig):
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
+        from .compose.robust import normalize
+        cfg.robust = normalize(cfg.robust, task)     # the figure's default sizes filled in
         search = make_search(family, cfg.seed, **_search_options(cfg, task))
     except TypeError as e:           # an option the constructor does not take
         raise ConfigError(f"{cfg.task} ({cfg.family}): {e}") from None
@@ -66,6 +68,8 @@ def _search_options(cfg: RunConfig, task: Task) -> dict:
     """cfg.search, with GP's ring-migration size fitted to small islands (the
     user cannot set ``migrants``; its default 2 needs islands of 4)."""
     opts = {k: v for k, v in cfg.search.items() if v is not None}
+    if cfg.robust and cfg.family == "gp":     # new starts each generation: costs never carry over
+        opts.setdefault("reuse_costs", False)
     if cfg.family == "gp" and "migrants" not in opts:
         from .search.adapters import GP_DEFAULTS
         pop = opts.get("population", task.gp_defaults.get("population", GP_DEFAULTS["population"]))
@@ -77,9 +81,10 @@ def _search_options(cfg: RunConfig, task: Task) -> dict:
 
 def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
+    robust = {**cfg.robust, "seed": cfg.seed} if cfg.robust else None   # starts: (seed, generation)
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
                           actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
-                          **(backend or {}))
+                          robust=robust, **(backend or {}))
 
 
 # ------------------------------------------------------------------ progress
@@ -416,7 +421,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             if max_generations is not None and done_now >= max_generations:
                 break
             genomes = search.ask()
-            ev = evaluator.evaluate(genomes, search.progress)
+            ev = evaluator.evaluate(genomes, search.progress, generation=search.generation)
             told = False
             search.tell(ev)
             row = _log_row(search, ev, rec.evals + len(genomes), time.perf_counter() - t0)
