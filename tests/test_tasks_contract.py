@@ -189,3 +189,33 @@ def test_each_task_owns_its_figure():
     a.figure.q_default[:] = 99.0
     assert not np.any(b.figure.q_default == 99.0)
     assert not np.any(gpmotion.load_figure("lamp").q_default == 99.0)
+
+
+@pytest.mark.parametrize("attrs, message", [
+    ({"name": "lamp_x-v2"}, "must be an identifier"),
+    ({"version": 0}, "version must be an integer >= 1"),
+    ({"version": True}, "version must be an integer"),
+    ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
+    ({"primitives": ()}, "primitives must be a non-empty tuple"),
+])
+def test_register_task_rejects_bad_declarations(attrs, message):
+    from gpmotion.task import register_task
+    cls = type("BadDecl", (gpmotion.Task,), {"name": "bad_decl", "figure": "lamp",
+                                             "terms": (Term("x", 1.0, main=True),), **attrs})
+    with pytest.raises(ValueError, match=message):
+        register_task(cls)
+
+
+def test_a_task_naming_an_unknown_primitive_fails_the_contract():
+    class Unknown(gpmotion.Task):
+        name = "unknown_prim"
+        figure = "lamp"
+        params = {"seconds": 0.2}
+        primitives = gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",)
+        terms = (Term("x", 1.0, main=True),)
+
+        def measure(self, traj):
+            return {"x": np.zeros(traj.n_episodes)}
+
+    with pytest.raises(AssertionError, match="unknown primitive 'no_such_primitive'"):
+        check_task(Unknown)
