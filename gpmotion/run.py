@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .inprocess import spec_of
+from .version import __version__
 from .families import make_family
 from .records import ConfigError, FormatError, validate_number
 from .rundir import RunDir
@@ -439,7 +440,6 @@ def _main_thread():
 
 
 def _versions():
-    from . import __version__       # the package's, set before it imports this module
     import deap
     import numba
     return {"gpmotion": __version__, "python": platform.python_version(), "numpy": np.__version__,

@@ -89,8 +89,8 @@ _OWN = dict([
     _gp_option("--max-size", "search", "max_size", "GP nodes per tree cap (default 200)",
                "the GP tree-size cap", dict(type=int), number(1, 512, True)),
     _gp_option("--primitives", "family", "primitives",
-               "GP function set, a comma list (default: every registered primitive; "
-               "gpmotion list primitives)", "the GP function set",
+               "GP function set, a comma list (default: the task's own set, shown by "
+               "gpmotion show TASK; names: gpmotion list primitives)", "the GP function set",
                dict(type=str, metavar="NAME,..."), _primitives),
     _gp_option("--erc-range", "family", "erc_range",
                "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",
