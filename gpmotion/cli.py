@@ -107,7 +107,7 @@ def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    from . import __version__
+    from .version import __version__
     ap.add_argument("--version", action="version", version=f"gpmotion {__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     p = sub.add_parser("help", help="help on a command: gpmotion help run")
@@ -385,6 +385,9 @@ def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
     _activate_plugins(args)
+    from .compose import playback                       # a composite file: its phases in series
+    if playback.is_composite(args.source):
+        return playback.replay(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -429,6 +432,9 @@ def cmd_render(args):
         raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
                          "(the task's 'seconds' parameter)")
     _activate_plugins(args)
+    from .compose import playback
+    if args.source and playback.is_composite(args.source):
+        return playback.render_command(args)
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
@@ -483,6 +489,9 @@ def cmd_export(args):
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
     _activate_plugins(args)
+    from .compose import playback
+    if playback.is_composite(args.source):
+        return playback.export_command(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
