@@ -24,7 +24,7 @@ def _mount_plugin_packages():
 
 
 _mount_plugin_packages()
-__version__ = "0.1.0"          # before the imports below: run.py records it
+from .version import __version__
 
 from .check import check_primitive, check_task
 from .evaluate import Evaluation

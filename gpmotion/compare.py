@@ -35,7 +35,7 @@ from .plugins import loaded as loaded_plugins
 from .records import atomic_write_json, atomic_write_text, envelope
 from .replay import replay_genome
 from .search.adapters import make_search, serial_generations
-from .task import get_task
+from .task import get_task, task_id
 
 
 def _search_opts(family: str, budget: int, population: int, task=None):
@@ -270,6 +270,6 @@ def replot(out) -> Path:
     """Redraw a compare folder's curves from its runs.json (no search is run)."""
     import json
     d = json.loads((Path(out) / "runs.json").read_text())
-    task = get_task(d["task"], **d["params"])
+    task = get_task(task_id(d["task"], recorded=True), **d["params"])    # bare: before ids, v1
     write_curves(out, task, d["runs"], int(d["budget"]), d["actuation"])
     return Path(out) / "curves.png"

@@ -155,6 +155,9 @@ class BSRSenseFamily(BSRFamily):
     def __init__(self, task, rules=None, **options):
         super().__init__(task, rules=rules or 8, **options)
         self.sense_indices = bsr_genome.table1_sense_indices(task.figure.sense_names)
+        if task.figure.dimensions == 3:  # §4.2's filtered figure-centric senses, contain
+            from .bsr.family3d import use_3d_senses
+            use_3d_senses(self)
 
     def random(self, rng):
         return bsr_genome.random_sense_genome(rng, self.options["rules"], len(self.sense_indices),

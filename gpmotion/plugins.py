@@ -64,7 +64,6 @@ MAX_PLUGINS = 64
 MAX_FILES = 256                 # modules + figures one manifest may name
 _HEX = re.compile(r"^[0-9a-f]{64}$")
 _FILE_STEM = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,99}$")
-BUILTIN_PACKAGES = ("gpmotion.primitives", "gpmotion.tasks")
 
 
 class PluginError(ValueError):
@@ -95,8 +94,9 @@ def load_builtin() -> None:
     if _BUILTIN_LOADED:
         return
     _BUILTIN_LOADED = True
-    for package in BUILTIN_PACKAGES:
-        import_package(package)
+    from .gp import primitives
+    primitives.load_builtin()
+    import_package("gpmotion.tasks")
     load_entry_points()
 
 

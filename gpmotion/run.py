@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .evaluate import spec_of
 from .families import make_family
 from .records import ConfigError, FormatError, validate_number

@@ -80,6 +80,15 @@ class CreatureTask(Task):
     def measure(self, traj):
         return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups)
 
+    def terminal_names(self) -> list[str]:
+        """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):
+        com height and vertical velocity, the root's velocity, angular velocity
+        and up axis, every contact force, the driven joints' angles, and time."""
+        fig = self.figure
+        body = ["com_z", "vx", "vy", "com_vz", "wx", "wy", "wz", "up_x", "up_y", "up_z", "t"]
+        return (body + [f"force_{c}" for c in fig.contact_names]
+                + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])
+
 
 def stage_end(paths) -> tuple[np.ndarray, np.ndarray]:
     """Final (q, qd) of saved controllers run in series (each for its own

@@ -26,7 +26,7 @@ class RexTurn(CreatureTask):
     feet = FEET
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (FEET[:4], FEET[4:])
-    params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 2.0, "after": ""}
+    params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 10.0, "after": ""}
     param_docs = {"seconds": "episode length (s)",
                   "success_degrees": "heading change that counts as solved (°)",
                   "w_sideways": "penalty per m of sideways com motion",

@@ -27,7 +27,7 @@ class RexWalk(CreatureTask):
     feet = FEET
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (FEET[:4], FEET[4:])
-    params = {"seconds": 4.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 2.0, "after": ""}
+    params = {"seconds": 3.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 10.0, "after": ""}
     param_docs = {"seconds": "episode length (s)",
                   "success_distance": "com travel that counts as solved (m)",
                   "w_sideways": "penalty per m of sideways com motion",

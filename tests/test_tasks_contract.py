@@ -126,7 +126,7 @@ def test_task_ids_are_versioned_and_the_bare_name_is_the_newest(tmp_path):
     from gpmotion import plugins
     from gpmotion.task import task_id, task_ids
     assert get_task("lamp_hop").id == "lamp_hop-v1" == get_task("lamp_hop-v1").id
-    assert all(re.fullmatch(r"[a-z_]+-v[0-9]+", t) for t in task_ids())
+    assert all(re.fullmatch(r"[a-z][a-z0-9_]*-v[0-9]+", t) for t in task_ids())
     assert {t.rsplit("-v", 1)[0] for t in task_ids()} == set(task_names())
     (tmp_path / "lamp_hop_v2_test.py").write_text(V2)
     (tmp_path / plugins.MANIFEST).write_text('modules = ["lamp_hop_v2_test"]\n')
@@ -189,3 +189,33 @@ def test_each_task_owns_its_figure():
     a.figure.q_default[:] = 99.0
     assert not np.any(b.figure.q_default == 99.0)
     assert not np.any(gpmotion.load_figure("lamp").q_default == 99.0)
+
+
+@pytest.mark.parametrize("attrs, message", [
+    ({"name": "lamp_x-v2"}, "must be an identifier"),
+    ({"version": 0}, "version must be an integer >= 1"),
+    ({"version": True}, "version must be an integer"),
+    ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
+    ({"primitives": ()}, "primitives must be a non-empty tuple"),
+])
+def test_register_task_rejects_bad_declarations(attrs, message):
+    from gpmotion.task import register_task
+    cls = type("BadDecl", (gpmotion.Task,), {"name": "bad_decl", "figure": "lamp",
+                                             "terms": (Term("x", 1.0, main=True),), **attrs})
+    with pytest.raises(ValueError, match=message):
+        register_task(cls)
+
+
+def test_a_task_naming_an_unknown_primitive_fails_the_contract():
+    class Unknown(gpmotion.Task):
+        name = "unknown_prim"
+        figure = "lamp"
+        params = {"seconds": 0.2}
+        primitives = gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",)
+        terms = (Term("x", 1.0, main=True),)
+
+        def measure(self, traj):
+            return {"x": np.zeros(traj.n_episodes)}
+
+    with pytest.raises(AssertionError, match="unknown primitive 'no_such_primitive'"):
+        check_task(Unknown)
