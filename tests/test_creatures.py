@@ -27,6 +27,7 @@ def n_rods(fig):
 @pytest.mark.parametrize("name, rods, free", [("cujo", 7, 9), ("rex", 15, 10), ("bob", 9, 10)])
 def test_creatures_have_the_papers_rods_and_free_angles(name, rods, free):
     fig = load_figure(name)
+    assert fig.name == name                       # (a body loop once shadowed the name)
     assert n_rods(fig) == rods and len(fig.actuator_names) == free
     slots = 2 * (rods - 1)                        # θ and ψ per joint (Fig. 6)
     fixed = slots - free
