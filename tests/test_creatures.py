@@ -288,6 +288,11 @@ def test_fallen_and_steps():
     fell = s3.fallen(up, com, np.zeros((5, 0)))
     assert fell.tolist() == [False, False, False, True, True]           # stays fallen
     assert s3.fall_fraction(fell) == pytest.approx(0.4)
+    # Rex's stricter thresholds: a trunk pitched 37° (up_z 0.8) or a com 30 % low has fallen
+    assert s3.fallen(np.array([1.0, 0.8]), np.ones(2), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert s3.fallen(np.ones(2), np.array([1.0, 0.7]), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert not s3.fallen(np.array([1.0, 0.8]), np.array([1.0, 0.7]), np.zeros((2, 0)))[-1]
+    assert gpmotion.get_task("rex_walk").max_tilt == pytest.approx(np.radians(30))
     # two feet alternate touchdowns, each landing 0.2 m ahead of the other
     force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
     fwd = np.array([[0, 0], [0, 0], [0.2, 0], [0.2, 0], [0.2, 0.4], [0.2, 0.4], [0.6, 0.4]])
