@@ -316,7 +316,7 @@ def test_bsr_families_score_creature_tasks_deterministically(task, family):
     t = gpmotion.get_task(task, seconds=0.5)
     fam = gpmotion.families.make_family(family, t)
     gs = [fam.random(np.random.default_rng(k)) for k in range(3)]
-    ev = gpmotion.evaluate.InProcessEvaluator(t, fam)
+    ev = gpmotion.inprocess.InProcessEvaluator(t, fam)
     a, b = ev.evaluate(gs), ev.evaluate(gs)
     assert np.all(np.isfinite(a.costs)) and np.array_equal(a.costs, b.costs)
     if family == "bsr-sense":
@@ -330,7 +330,7 @@ def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
     g = fam.random(np.random.default_rng(2))
     path = tmp_path / "walk.json"
     save_controller(path, walk, g, family=fam)
-    ev = gpmotion.evaluate.InProcessEvaluator(walk, fam)
+    ev = gpmotion.inprocess.InProcessEvaluator(walk, fam)
     end = ev.rollout([g])
     turn = gpmotion.get_task("rex_turn", after=str(path))
     q0, qd0 = turn.initial_state()
