@@ -27,6 +27,7 @@ def n_rods(fig):
 @pytest.mark.parametrize("name, rods, free", [("cujo", 7, 9), ("rex", 15, 10), ("bob", 9, 10)])
 def test_creatures_have_the_papers_rods_and_free_angles(name, rods, free):
     fig = load_figure(name)
+    assert fig.name == name                       # (a body loop once shadowed the name)
     assert n_rods(fig) == rods and len(fig.actuator_names) == free
     slots = 2 * (rods - 1)                        # θ and ψ per joint (Fig. 6)
     fixed = slots - free
@@ -292,6 +293,11 @@ def test_fallen_and_steps():
     fell = s3.fallen(up, com, np.zeros((5, 0)))
     assert fell.tolist() == [False, False, False, True, True]           # stays fallen
     assert s3.fall_fraction(fell) == pytest.approx(0.4)
+    # Rex's stricter thresholds: a trunk pitched 37° (up_z 0.8) or a com 30 % low has fallen
+    assert s3.fallen(np.array([1.0, 0.8]), np.ones(2), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert s3.fallen(np.ones(2), np.array([1.0, 0.7]), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert not s3.fallen(np.array([1.0, 0.8]), np.array([1.0, 0.7]), np.zeros((2, 0)))[-1]
+    assert gpmotion.get_task("rex_walk").max_tilt == pytest.approx(np.radians(30))
     # two feet alternate touchdowns, each landing 0.2 m ahead of the other
     force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
     fwd = np.array([[0, 0], [0, 0], [0.2, 0], [0.2, 0], [0.2, 0.4], [0.2, 0.4], [0.6, 0.4]])
