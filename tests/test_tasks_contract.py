@@ -126,7 +126,7 @@ def test_task_ids_are_versioned_and_the_bare_name_is_the_newest(tmp_path):
     from gpmotion import plugins
     from gpmotion.task import task_id, task_ids
     assert get_task("lamp_hop").id == "lamp_hop-v1" == get_task("lamp_hop-v1").id
-    assert all(re.fullmatch(r"[a-z_]+-v[0-9]+", t) for t in task_ids())
+    assert all(re.fullmatch(r"[a-z][a-z0-9_]*-v[0-9]+", t) for t in task_ids())
     assert {t.rsplit("-v", 1)[0] for t in task_ids()} == set(task_names())
     (tmp_path / "lamp_hop_v2_test.py").write_text(V2)
     (tmp_path / plugins.MANIFEST).write_text('modules = ["lamp_hop_v2_test"]\n')
