@@ -26,7 +26,9 @@ class RexTurn(CreatureTask):
     feet = FEET
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (FEET[:4], FEET[4:])
-    params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 2.0, "after": ""}
+    max_tilt = np.radians(30.0)     # Rex's trunk pitched 30° or his com 25 % lower: fallen
+    min_height = 0.75               # (at 60°/50 % a search walked by falling slowly forward)
+    params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 10.0, "after": ""}
     param_docs = {"seconds": "episode length (s)",
                   "success_degrees": "heading change that counts as solved (°)",
                   "w_sideways": "penalty per m of sideways com motion",

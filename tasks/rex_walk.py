@@ -7,6 +7,8 @@ fallen), all in the frame Rex starts in.  With ``after`` (the walk's and the
 turn's controllers) this is the third stage of walk → turn → walk.
 Solved: ≥ 1 m forward without falling.
 """
+import numpy as np
+
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._creature3d import CreatureTask
 
@@ -27,7 +29,9 @@ class RexWalk(CreatureTask):
     feet = FEET
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (FEET[:4], FEET[4:])
-    params = {"seconds": 4.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 2.0, "after": ""}
+    max_tilt = np.radians(30.0)     # Rex's trunk pitched 30° or his com 25 % lower: fallen
+    min_height = 0.75               # (at 60°/50 % a search walked by falling slowly forward)
+    params = {"seconds": 3.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 10.0, "after": ""}
     param_docs = {"seconds": "episode length (s)",
                   "success_distance": "com travel that counts as solved (m)",
                   "w_sideways": "penalty per m of sideways com motion",

@@ -194,3 +194,18 @@ def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys, m
                 "--out", str(tmp_path / "b"), "--table-only"])
     out = capsys.readouterr().out
     assert "| tiny | 2 | 60 ×1, 40 ×1 |" in out
+
+
+def test_study_never_mixes_in_runs_of_other_settings(tmp_path, capsys):
+    study = _study()
+    study.run_one("tiny", 3, 20, str(tmp_path))
+    assert (("tiny", 3, 20) in study.load_results(tmp_path))
+    study.CONFIGS["tiny"] = ("starman_travel", "bsr-time", {"seconds": 0.5, "w_rotations": 1.0}, {},
+                             ("hop",), "tiny")
+    assert study.load_results(tmp_path) == {}          # the stored result is stale: skipped
+    assert "other settings" in capsys.readouterr().err
+    (tmp_path / "tiny-seed3-20.json").unlink()         # its run folder is refused, not resumed
+    with pytest.raises(SystemExit) as e:
+        study.main(["--configs", "tiny", "--seeds", "1", "--first-seed", "3", "--budget", "20",
+                    "--out", str(tmp_path)])
+    assert e.value.code == 2

@@ -72,6 +72,11 @@ def round_rng(seed: int, round_: int) -> np.random.Generator:
     return np.random.default_rng([int(seed), int(round_), 0x0B5A])
 
 
+def trial_rng(seed: int) -> np.random.Generator:
+    """The generator of ``gpmotion robustness``'s trials: never a training round's."""
+    return np.random.default_rng([int(seed), 0x7E57])
+
+
 def perturbed_starts(figure, q0, qd0, k: int, rng: np.random.Generator,
                      sizes: Perturbation = Perturbation()) -> tuple[np.ndarray, np.ndarray]:
     """K perturbed initial states (q [K, nq], qd [K, nv]) around (q0, qd0)."""
@@ -198,16 +203,18 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
 
 
 def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int = 0,
-               sizes: Perturbation = Perturbation(), threads: int | None = None) -> dict:
+               sizes: Perturbation | None = None, threads: int | None = None) -> dict:
     """Success rate and cost spread of one controller over ``trials`` perturbed starts.
 
     Trial 0 is the nominal start (so the table also says how the controller
-    does as evolved); the other trials are drawn from ``round_rng(seed, 0)``.
+    does as evolved); the other trials are drawn from ``trial_rng(seed)``, a
+    stream no run's training starts come from.  ``sizes`` default: the figure's.
     """
+    sizes = sizes_for(type(task).figure) if sizes is None else sizes
     if not 1 <= trials <= 100_000:
         raise ValueError(f"trials must be in 1..100000, got {trials}")
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, round_rng(seed, 0), sizes)
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, trial_rng(seed), sizes)
     q0s[0], qd0s[0] = q0, qd0
     traj = robust_rollout(task.figure, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
@@ -259,7 +266,7 @@ def sizes_of(robust: dict) -> Perturbation:
 def batch_evaluation(ev, genomes, progress: float, generation: int):
     """One generation's batch scored from ``ev.robust['starts']`` perturbed starts.
 
-    ``ev`` is an :class:`gpmotion.evaluate.InProcessEvaluator` whose ``robust``
+    ``ev`` is an :class:`gpmotion.inprocess.InProcessEvaluator` whose ``robust``
     holds a normalized setting plus the run's ``seed``.  The starts depend on
     (seed, generation) only, so chunks on any backend and a resumed run see
     the same ones.  Per controller: cost = the aggregate of its K costs;
@@ -268,7 +275,7 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     worst start (``worst``), so a cost recomputed from them (the final-weights
     column) agrees with the aggregate; extras (BSR senses) from its first start.
     """
-    from ..evaluate import Evaluation
+    from ..evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
     q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
@@ -285,9 +292,8 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
         c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
         pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
         folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
-    extras = None
-    if fam.needs_senses:
-        extras = [fam.normalized(traj.senses[e * k]) for e in range(n)]
+    extras = fam.extras(traj)                                   # per episode; a genome's first start
+    extras = None if extras is None else extras[::k]
     return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
                       traj.diverged.reshape(n, k).any(axis=1), folded, extras)
 
