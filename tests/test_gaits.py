@@ -169,7 +169,12 @@ def _study():
     return mod
 
 
-def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys):
+def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys, monkeypatch):
+    # run_one sets NUMBA_NUM_THREADS=1 unless set (for its own process); here it must keep
+    # numba's value, or every later compile in this process fails ("Cannot set
+    # NUMBA_NUM_THREADS to a different value once the threads have been launched")
+    import numba
+    monkeypatch.setenv("NUMBA_NUM_THREADS", str(numba.config.NUMBA_NUM_THREADS))
     from gpmotion.run import run
     from gpmotion.runconfig import RunConfig
     study = _study()
