@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.search.gp import GPSearch
 from gpmotion.task import get_task

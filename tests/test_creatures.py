@@ -185,7 +185,7 @@ def test_low_pass_step_response():
 def test_sense_kernel_filters_and_selects_as_its_numpy_twin():
     task = gpmotion.get_task("bob_walk", seconds=1.0)
     fam = gpmotion.families.make_family("bsr-sense", task)
-    ev = gpmotion.evaluate.InProcessEvaluator(task, fam)
+    ev = gpmotion.inprocess.InProcessEvaluator(task, fam)
     rng = np.random.default_rng(3)
     gs = [fam.random(rng) for _ in range(3)]
     for _ in range(3):                      # contain rules: several rules get to fire
@@ -252,17 +252,22 @@ def test_enriched_search_starts_from_the_best_of_100_enriched_controllers():
     def score(g):                            # lower is better: θ₀ near 0.5
         return float(np.abs(g.theta0 - 0.5).sum())
 
-    s = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
-                                     rng=rng0, maximize=False)
+    from types import SimpleNamespace
+
+    from gpmotion.bsr.genome import genome_from_dict
+    from gpmotion.evaluation import Evaluation
+    fam = SimpleNamespace(random=init, mutate=contain.mutate, copy=lambda g: g.copy(),
+                          to_json=lambda g: g.to_dict(), from_json=genome_from_dict)
+    s = contain.EnrichedSerialSearch(fam, n_working=10, n_generations=5, rng=rng0)
     traj = np.full((5, 3), 0.5)
     sizes = []
     while not s.done:
         cand = s.ask()
         sizes.append(len(cand))
-        s.tell([score(g) for g in cand], [traj] * len(cand))
+        s.tell(Evaluation.of_costs([score(g) for g in cand], [traj] * len(cand)))
         if len(sizes) == 2:                  # checkpoint mid-enrichment and resume
-            s2 = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
-                                              rng=np.random.default_rng(9), maximize=False)
+            s2 = contain.EnrichedSerialSearch(fam, n_working=10, n_generations=5,
+                                              rng=np.random.default_rng(9))
             s2.load_state_dict(s.state_dict())
             assert s2.round == 1 and len(s2.pool[0]) == 100
             assert [score(g) for g in s2.ask()] == [score(g) for g in s.ask()]

@@ -80,33 +80,33 @@ class EnrichedSerialSearch(SerialSearch):
     the last round pick the working set.  All of these count as evaluations.
     """
 
-    def __init__(self, init_fn, mutate_fn, n_initial: int = ENRICH_INITIAL,
-                 rounds: int = ENRICH_ROUNDS, **kw):
-        super().__init__(init_fn, mutate_fn, **kw)
+    def __init__(self, family, n_initial: int = ENRICH_INITIAL, rounds: int = ENRICH_ROUNDS,
+                 **kw):
+        super().__init__(family, **kw)
         if n_initial < self.n_working or rounds < 0:
             raise ValueError(f"enrichment needs n_initial >= n_working ({self.n_working}) and rounds >= 0")
         self.n_initial, self.rounds = int(n_initial), int(rounds)
-        self.pool = None               # [genomes, scores, extras] while enriching
+        self.pool = None               # [genomes, costs, extras] while enriching
         self.round = 0
 
-    def ask(self) -> list:
+    def _ask(self) -> list:
         if self.working is not None:
-            return super().ask()
+            return super()._ask()
         if self.pending is None:
             if self.pool is None:
-                self.pending = [self.init_fn(self.rng) for _ in range(self.n_initial)]
+                self.pending = [self.family.random(self.rng) for _ in range(self.n_initial)]
             else:
                 self.pending = [contain_rule(g, self.rng, e) for g, e in zip(self.pool[0], self.pool[2])]
         return list(self.pending)
 
-    def tell(self, scores, extras=None) -> None:
+    def _tell(self, ev) -> None:
         if self.working is not None:
-            return super().tell(scores, extras)
+            return super()._tell(ev)
         if self.pending is None:
             raise RuntimeError("tell() without a pending ask()")
-        scores = np.array(scores, dtype=np.float64).ravel()
+        scores = np.array(ev.costs, dtype=np.float64).ravel()
         n = len(self.pending)
-        extras = [None] * n if extras is None else list(extras)
+        extras = [None] * n if ev.extras is None else list(ev.extras)
         if scores.size != n or len(extras) != n:
             raise ValueError(f"tell: expected {n} scores and extras, got {scores.size} and {len(extras)}")
         self.evaluations += n
@@ -126,23 +126,23 @@ class EnrichedSerialSearch(SerialSearch):
             self.pool = None
         self.history.append((self.evaluations, self.best_score))
 
-    def state_dict(self) -> dict:
-        state = super().state_dict()
-        enc = self.genome_to_json
+    def _state(self) -> dict:
+        state = super()._state()
+        enc = self.family.to_json
         state["enrich"] = {"n_initial": self.n_initial, "rounds": self.rounds, "round": self.round,
                            "pool": None if self.pool is None else
                            [[enc(g) for g in self.pool[0]], [_score_to_json(s) for s in self.pool[1]],
                             [_extra_to_json(e) for e in self.pool[2]]]}
         return state
 
-    def load_state_dict(self, state: dict) -> None:
-        super().load_state_dict(state)
+    def _load(self, state: dict) -> None:
+        super()._load(state)
         e = state.get("enrich")
         if not isinstance(e, dict):
             raise ValueError("not an enriched serial-search checkpoint (no 'enrich' entry)")
         self.n_initial, self.rounds, self.round = int(e["n_initial"]), int(e["rounds"]), int(e["round"])
         pool = e["pool"]
         self.pool = None if pool is None else [
-            [self.genome_from_json(g) for g in pool[0]],
-            np.array([(-np.inf if self.maximize else np.inf) if s is None else float(s) for s in pool[1]]),
+            [self.family.from_json(g) for g in pool[0]],
+            np.array([np.inf if s is None else float(s) for s in pool[1]]),
             [_extra_from_json(x) for x in pool[2]]]
