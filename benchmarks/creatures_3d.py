@@ -64,13 +64,11 @@ def rates(a) -> int:
 
 def search(task, family: str, seed: int, budget: int, stop_on_success=False):
     """One search (the compare loop); returns (best genome, family, facts)."""
-    from gpmotion.evaluate import InProcessEvaluator
     from gpmotion.families import make_family
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.replay import replay_genome
-    from gpmotion.search.adapters import make_search
-    from gpmotion.compare import _search_opts
     fam = make_family(family, task, **options(task.name).get(family, {}))
-    s = make_search(fam, seed, **_search_opts(family, budget, 100, task))
+    s = fam.make_search(seed, n_working=10, n_generations=max(1, budget // 10 - 1))
     ev = InProcessEvaluator(task, fam, actuation=ACTUATION)
     evals, first, t0, c0 = 0, None, time.perf_counter(), time.process_time()
     while not s.done and evals < budget:
