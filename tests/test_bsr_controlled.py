@@ -35,6 +35,8 @@ def test_bsr_genome_has_parameters_for_the_driven_joints_only(task):
         assert fam.from_json(fam.to_json(g)).n_act == 6
         ci = fam.encode([g]).ci[0]
         head = 3 if name == "bsr-time" else 3 + len(fam.sense_indices)   # time: [R, n_act, variable]
+        if name == "bsr-sense" and task.figure.dimensions == 3:   # sense3d_kernel's layout
+            head = 6 + 11 + fam.senses3d.plan.extra.size
         assert list(ci[head:head + 6]) == driven
 
 
