@@ -68,7 +68,7 @@ def search(task, family: str, seed: int, budget: int, stop_on_success=False):
     from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.replay import replay_genome
     fam = make_family(family, task, **options(task.name).get(family, {}))
-    s = fam.make_search(seed, **fam.budget_settings(budget, 100 if fam.takes_population else None))
+    s = fam.make_search(seed, n_working=10, n_generations=max(1, budget // 10 - 1))
     ev = InProcessEvaluator(task, fam, actuation=ACTUATION)
     evals, first, t0, c0 = 0, None, time.perf_counter(), time.process_time()
     while not s.done and evals < budget:

@@ -76,13 +76,13 @@ class EnrichedSerialSearch(SerialSearch):
     """Fig. 3's serial search started from enriched controllers (module doc).
 
     Before the search proper, ``ask`` hands out the ``n_initial`` random
-    controllers, then ``rounds`` times their contain-mutants; the scores of
+    controllers, then ``rounds`` times their contain-mutants; the costs of
     the last round pick the working set.  All of these count as evaluations.
     """
 
-    def __init__(self, family, n_initial: int = ENRICH_INITIAL, rounds: int = ENRICH_ROUNDS,
-                 **kw):
-        super().__init__(family, **kw)
+    def __init__(self, family, seed=None, n_initial: int = ENRICH_INITIAL,
+                 rounds: int = ENRICH_ROUNDS, **kw):
+        super().__init__(family, seed, **kw)
         if n_initial < self.n_working or rounds < 0:
             raise ValueError(f"enrichment needs n_initial >= n_working ({self.n_working}) and rounds >= 0")
         self.n_initial, self.rounds = int(n_initial), int(rounds)
@@ -104,23 +104,23 @@ class EnrichedSerialSearch(SerialSearch):
             return super()._tell(ev)
         if self.pending is None:
             raise RuntimeError("tell() without a pending ask()")
-        scores = np.array(ev.costs, dtype=np.float64).ravel()
+        costs = np.array(ev.costs, dtype=np.float64).ravel()
         n = len(self.pending)
         extras = [None] * n if ev.extras is None else list(ev.extras)
-        if scores.size != n or len(extras) != n:
-            raise ValueError(f"tell: expected {n} scores and extras, got {scores.size} and {len(extras)}")
+        if costs.size != n or len(extras) != n:
+            raise ValueError(f"tell: expected {n} costs and extras, got {costs.size} and {len(extras)}")
         self.evaluations += n
         if self.pool is not None:
             self.round += 1
-        self.pool, self.pending = [list(self.pending), scores, extras], None
-        i = max(range(n), key=lambda k: (self._key(scores[k]), -k))
-        if self.best_genome is None or self._better(scores[i], self.best_score):
-            self.best_genome, self.best_score = self.pool[0][i].copy(), float(scores[i])
+        self.pool, self.pending = [list(self.pending), costs, extras], None
+        i = max(range(n), key=lambda k: (self._key(costs[k]), -k))
+        if self.best_genome is None or self._better(costs[i], self.best_score):
+            self.best_genome, self.best_score = self.family.copy(self.pool[0][i]), float(costs[i])
         if self.round >= self.rounds:
-            keys = np.array([self._key(s) for s in scores])
+            keys = np.array([self._key(c) for c in costs])
             top = np.argsort(-keys, kind="stable")[:self.n_working]
             self.working = [self.pool[0][k] for k in top]
-            self.scores = scores[top].copy()
+            self.scores = costs[top].copy()
             self.extras = [extras[k] for k in top]
             self.phase = self.current_phase()
             self.pool = None
@@ -131,7 +131,7 @@ class EnrichedSerialSearch(SerialSearch):
         enc = self.family.to_json
         state["enrich"] = {"n_initial": self.n_initial, "rounds": self.rounds, "round": self.round,
                            "pool": None if self.pool is None else
-                           [[enc(g) for g in self.pool[0]], [_score_to_json(s) for s in self.pool[1]],
+                           [[enc(g) for g in self.pool[0]], [_score_to_json(c) for c in self.pool[1]],
                             [_extra_to_json(e) for e in self.pool[2]]]}
         return state
 
@@ -144,5 +144,5 @@ class EnrichedSerialSearch(SerialSearch):
         pool = e["pool"]
         self.pool = None if pool is None else [
             [self.family.from_json(g) for g in pool[0]],
-            np.array([np.inf if s is None else float(s) for s in pool[1]]),
+            np.array([np.inf if c is None else float(c) for c in pool[1]]),
             [_extra_from_json(x) for x in pool[2]]]
