@@ -69,6 +69,15 @@ class CreatureTask(Task):
     record_every = RECORD_EVERY
     _start = None
 
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        self.terms = self.make_terms(self.params)   # weights are parameters (validate() stays pure)
+
+    @classmethod
+    def make_terms(cls, params):
+        """The score terms under these parameter values (default: the class's)."""
+        return cls.terms
+
     def validate(self):
         after = self.params.get("after", "")
         if not isinstance(after, str):

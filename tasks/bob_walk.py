@@ -42,9 +42,9 @@ class BobWalk(CreatureTask):
     terms = bob_terms(params)
     success_threshold = "≥ 5 forward steps before falling, facing forward"
 
-    def validate(self):
-        super().validate()
-        self.terms = bob_terms(self.params)
+    @classmethod
+    def make_terms(cls, params):
+        return bob_terms(params)
 
     def success(self, traj, m):
         return m["steps"] >= self.params["success_steps"]

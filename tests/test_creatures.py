@@ -326,3 +326,15 @@ def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
     assert np.allclose(q0, end.q[0, -1]) and np.allclose(qd0, end.qd[0, -1])
     with pytest.raises(ValueError, match="after"):
         gpmotion.get_task("rex_turn", after=str(tmp_path / "missing.json")).initial_state()
+
+
+@pytest.mark.parametrize("name, param", [("rex_walk", "w_fall"), ("rex_turn", "w_sideways"),
+                                         ("cujo_travel", "w_fall"), ("bob_walk", "w_fall")])
+def test_creature_weights_are_parameters_and_validate_is_pure(name, param):
+    """Weights come from the parameters when the task is built; validate() changes nothing."""
+    t = gpmotion.get_task(name, **{param: 7.0})
+    terms = t.terms
+    assert any(x.weight == 7.0 for x in terms)
+    t.params[param] = 1.0
+    t.validate()
+    assert t.terms is terms
