@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpmotion.bsr.genome import LAMBDA_MAX, LAMBDA_MIN, SenseGenome, log_uniform, random_theta0
-from gpmotion.bsr.mutation import P_REINIT, creep_rule
+from gpmotion.bsr.mutation import P_REINIT, creep_rule, usable_frame
 from gpmotion.search.serial import SerialSearch, _extra_from_json, _extra_to_json, _score_to_json
 
 ENRICH_INITIAL = 100
@@ -34,14 +34,10 @@ ENRICH_ROUNDS = 3
 def containing_stimulus(rng: np.random.Generator, trajectory):
     """(μ, λ, point, frame): a Table-2-sized box containing a random usable
     frame of ``trajectory`` [F, V] (normalized senses); None if none is usable."""
-    traj = np.asarray(trajectory, dtype=np.float64)
-    if traj.ndim != 2 or traj.shape[0] == 0:
+    picked = usable_frame(trajectory, rng)
+    if picked is None:
         return None
-    usable = np.flatnonzero(np.all(np.isfinite(traj), axis=1))
-    if usable.size == 0:
-        return None
-    frame = int(usable[rng.integers(usable.size)])
-    point = np.clip(traj[frame], 0.0, 1.0)
+    frame, point = picked
     lam = np.clip(2.0 / log_uniform(rng, 0.4, 4.0, point.size), LAMBDA_MIN, LAMBDA_MAX)
     mu = point + rng.uniform(-1.0, 1.0, point.size) / lam
     return mu, lam, point, frame
