@@ -38,7 +38,7 @@ import copy
 import math
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -58,15 +58,26 @@ class Term:
     ``phase = (a, b)``: the factor ramps from 0 at run progress a to 1 at b
     (progress = generation / generations), so style points arrive after the
     main goal has been learned, as in Gritz & Hahn.
+
+    ``param``: the weight is a task parameter, ``weight × params[param]``
+    (``weight`` is then its sign and scale); a task instance holds its terms
+    with the weights resolved (:meth:`under`).
     """
     name: str
     weight: float
     phase: tuple[float, float] = (0.0, 0.0)
     main: bool = False
     doc: str = ""
+    param: str = ""
 
     def factor(self, progress: float) -> float:
         return ramp(self.phase, progress)
+
+    def under(self, params: dict) -> Term:
+        """This term with the weight in force under ``params``."""
+        if not self.param:
+            return self
+        return replace(self, weight=self.weight * float(params[self.param]), param="")
 
 
 def ramp(phase: tuple[float, float], progress: float) -> float:
@@ -166,6 +177,7 @@ class Task:
             raise ValueError(f"task {self.name}: seconds must be in [{shortest:g}, 120], "
                              f"got {self.params['seconds']}")
         self.validate()
+        self.terms = tuple(t.under(self.params) for t in type(self).terms)
         self.figure = load_figure(type(self).figure)
         if variant is not None:
             self._use_variant(variant)
@@ -337,6 +349,9 @@ def register_task(cls: type[Task]) -> type[Task]:
         raise ValueError(f"task {cls.name}: version must be an integer >= 1, got {cls.version!r}")
     if not cls.terms or not any(t.main for t in cls.terms):
         raise ValueError(f"task {cls.name}: needs terms with one main=True term")
+    unknown = [t.param for t in cls.terms if t.param and t.param not in cls.params]
+    if unknown:
+        raise ValueError(f"task {cls.name}: terms weighted by unknown parameter(s) {unknown}")
     if (not isinstance(cls.primitives, tuple) or not cls.primitives
             or not all(isinstance(n, str) for n in cls.primitives)):
         raise ValueError(f"task {cls.name}: primitives must be a non-empty tuple of primitive names")

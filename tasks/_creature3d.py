@@ -25,10 +25,15 @@ from __future__ import annotations
 import numpy as np
 
 from gpmotion.bsr import secondary3d as s3
-from gpmotion.task import Task
+from gpmotion.task import Task, Term
 
 # Bob and Rex are compared at the paper's resolution: 50 frames/s
 RECORD_EVERY = 20
+
+# the terms the creatures share; a weight named by a parameter is the user's to set
+DISTANCE = Term("distance", -1.0, main=True, doc="com displacement along the start heading (m)")
+SIDEWAYS = Term("sideways", 1.0, param="w_sideways", doc="|com displacement across the start heading| (m)")
+FALL = Term("fall", 1.0, param="w_fall", doc="fraction of the episode fallen")
 
 
 def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX_TILT,
@@ -67,16 +72,11 @@ class CreatureTask(Task):
     max_tilt = s3.MAX_TILT          # fallen: root tilted further (rad) ...
     min_height = s3.MIN_HEIGHT      # ... or com below this fraction of its start height
     record_every = RECORD_EVERY
+    param_docs = {"seconds": "episode length (s)",
+                  "w_sideways": "penalty per m of sideways com motion",
+                  "w_fall": "penalty for falling (× fraction of the episode fallen)",
+                  "after": "start from the end of these saved controllers (comma-separated files)"}
     _start = None
-
-    def __init__(self, **overrides):
-        super().__init__(**overrides)
-        self.terms = self.make_terms(self.params)   # weights are parameters (validate() stays pure)
-
-    @classmethod
-    def make_terms(cls, params):
-        """The score terms under these parameter values (default: the class's)."""
-        return cls.terms
 
     def validate(self):
         after = self.params.get("after", "")

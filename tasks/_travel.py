@@ -6,13 +6,12 @@ from gpmotion.sim import geometry
 from gpmotion.task import Task, Term
 
 
-def travel_terms(p):
-    """Rewards as negative weights: cost = −(distance + Σ w·secondary)."""
-    return (Term("distance", -1.0, main=True, doc="com x displacement (m), rewarded"),
-            Term("max_height", -p["w_max_height"], doc="highest com z (m)"),
-            Term("contact_distance", -p["w_contact_distance"],
-                 doc="m travelled right by points in continuous contact (shuffle)"),
-            Term("rotations", -p["w_rotations"], doc="whole-body turns (fractional)"))
+# rewards as negative weights: cost = −(distance + Σ w·secondary); the w are parameters
+TRAVEL_TERMS = (Term("distance", -1.0, main=True, doc="com x displacement (m), rewarded"),
+                Term("max_height", -1.0, param="w_max_height", doc="highest com z (m)"),
+                Term("contact_distance", -1.0, param="w_contact_distance",
+                     doc="m travelled right by points in continuous contact (shuffle)"),
+                Term("rotations", -1.0, param="w_rotations", doc="whole-body turns (fractional)"))
 
 
 def travel_measures(traj):
@@ -48,13 +47,9 @@ class TravelTask(Task):
                   "w_max_height": "weight of the max_height reward (Auslander's Table 3)",
                   "w_contact_distance": "weight of the contact_distance reward (shuffle)",
                   "w_rotations": "weight of the rotations reward (cartwheel)"}
-    terms = travel_terms(TRAVEL_PARAMS)
+    terms = TRAVEL_TERMS
     success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
     record_every = 20           # 50 frames/s resolve every gait event these terms use
-
-    def __init__(self, **overrides):
-        super().__init__(**overrides)
-        self.terms = travel_terms(self.params)      # weights are parameters (validate() stays pure)
 
     def measure(self, traj):
         return travel_measures(traj)

@@ -9,15 +9,7 @@ ahead of the other) before falling, facing within 45° of the start heading.
 import numpy as np
 
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._creature3d import CreatureTask
-
-
-def bob_terms(p):
-    return (Term("distance", -1.0, main=True, doc="com displacement along the start heading (m)"),
-            Term("feet_forward", -float(p["w_feet"]), doc="mean forward displacement of the feet (m)"),
-            Term("sideways", float(p["w_sideways"]), doc="|com displacement across the start heading| (m)"),
-            Term("fall", float(p["w_fall"]), doc="fraction of the episode fallen"),
-            Term("rotation", float(p["w_rotation"]), doc="|net rotation about the vertical| (rad)"))
+from gpmotion.tasks._creature3d import DISTANCE, FALL, SIDEWAYS, CreatureTask
 
 
 @register_task
@@ -32,19 +24,15 @@ class BobWalk(CreatureTask):
     min_height = 0.7
     params = {"seconds": 4.0, "success_steps": 5.0, "w_feet": 0.5, "w_sideways": 0.5, "w_fall": 2.0,
               "w_rotation": 0.3, "after": ""}
-    param_docs = {"seconds": "episode length (s)",
+    param_docs = {**CreatureTask.param_docs,
                   "success_steps": "forward steps before falling that count as solved",
                   "w_feet": "reward per m of forward foot motion",
-                  "w_sideways": "penalty per m of sideways com motion",
-                  "w_fall": "penalty for falling (× fraction of the episode fallen)",
-                  "w_rotation": "penalty per rad of net rotation about the vertical",
-                  "after": "start from the end of these saved controllers (comma-separated files)"}
-    terms = bob_terms(params)
+                  "w_rotation": "penalty per rad of net rotation about the vertical"}
+    terms = (DISTANCE,
+             Term("feet_forward", -1.0, param="w_feet", doc="mean forward displacement of the feet (m)"),
+             SIDEWAYS, FALL,
+             Term("rotation", 1.0, param="w_rotation", doc="|net rotation about the vertical| (rad)"))
     success_threshold = "≥ 5 forward steps before falling, facing forward"
-
-    @classmethod
-    def make_terms(cls, params):
-        return bob_terms(params)
 
     def success(self, traj, m):
         return m["steps"] >= self.params["success_steps"]

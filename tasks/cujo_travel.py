@@ -8,8 +8,8 @@ report counts bounds: flights with all four feet off the ground.
 """
 import numpy as np
 
-from gpmotion.task import Term, register_task
-from gpmotion.tasks._creature3d import CreatureTask
+from gpmotion.task import register_task
+from gpmotion.tasks._creature3d import DISTANCE, FALL, CreatureTask
 
 BODY_LENGTH = 0.6          # m: Cujo's trunk, shoulder to hip (figures/cujo.toml)
 FEET = ("foot_fl", "foot_fr", "foot_hl", "foot_hr")
@@ -29,17 +29,11 @@ class CujoTravel(CreatureTask):
     description = "Cujo (7 rods) travels forward, e.g. by bounding"
     feet = FEET
     params = {"seconds": 3.0, "success_distance": BODY_LENGTH, "w_fall": 0.0, "after": ""}
-    param_docs = {"seconds": "episode length (s)",
+    param_docs = {**CreatureTask.param_docs,
                   "success_distance": "com travel that counts as solved (m; 0.6 = one body length)",
-                  "w_fall": "weight of the fall penalty (fraction of the episode fallen)",
-                  "after": "start from the end of these saved controllers (comma-separated files)"}
-    terms = (Term("distance", -1.0, main=True, doc="com displacement along the start heading (m)"),
-             Term("fall", 0.0, doc="fraction of the episode fallen"))
+                  "w_fall": "weight of the fall penalty (fraction of the episode fallen)"}
+    terms = (DISTANCE, FALL)
     success_threshold = "com ≥ one body length (0.6 m) forward, upright at the end"
-
-    @classmethod
-    def make_terms(cls, params):
-        return (cls.terms[0], Term("fall", float(params["w_fall"]), doc=cls.terms[1].doc))
 
     def measure(self, traj):
         m = super().measure(traj)

@@ -11,12 +11,6 @@ from gpmotion.task import Term, register_task
 from gpmotion.tasks.rex_walk import RexTask
 
 
-def turn_terms(p):
-    return (Term("turn", -1.0, main=True, doc="|change of heading| (rad)"),
-            Term("sideways", float(p["w_sideways"]), doc="|com displacement across the start heading| (m)"),
-            Term("fall", float(p["w_fall"]), doc="fraction of the episode fallen"))
-
-
 @register_task
 class RexTurn(RexTask):
     name = "rex_turn"
@@ -24,12 +18,8 @@ class RexTurn(RexTask):
     params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 10.0, "after": ""}
     param_docs = {**RexTask.param_docs,
                   "success_degrees": "heading change that counts as solved (°)"}
-    terms = turn_terms(params)
+    terms = (Term("turn", -1.0, main=True, doc="|change of heading| (rad)"), *RexTask.penalties)
     success_threshold = "heading changes ≥ 45°, never fallen"
-
-    @classmethod
-    def make_terms(cls, params):
-        return turn_terms(params)
 
     def success(self, traj, m):
         return (m["turn"] >= np.radians(self.params["success_degrees"])) & (m["fall"] == 0)

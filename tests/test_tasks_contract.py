@@ -37,18 +37,25 @@ def test_a_user_task_in_one_small_file_registers_and_passes(tmp_path):
     check_task("lamp_stand_tall")
 
 
+def lamp_task(label, **attrs):
+    """An unregistered short lamp task named ``label`` with one main term "x"
+    (``attrs`` override any class attribute, the name too)."""
+    return type(label, (gpmotion.Task,), {"name": label, "figure": "lamp", "params": {"seconds": 0.2},
+                                          "terms": (Term("x", 1.0, main=True),), **attrs})
+
+
 def test_a_broken_task_fails_the_contract():
-    class Broken(gpmotion.Task):
-        name = "broken_nan"
-        figure = "lamp"
-        params = {"seconds": 0.2}
-        terms = (Term("x", 1.0, main=True),)
-
-        def measure(self, traj):
-            return {"x": np.full(traj.n_episodes, np.nan)}
-
+    broken = lamp_task("broken_nan", measure=lambda self, traj: {"x": np.full(traj.n_episodes, np.nan)})
     with pytest.raises(AssertionError, match="not finite"):
-        check_task(Broken)
+        check_task(broken)
+
+
+def test_a_weight_named_by_a_parameter_is_resolved_per_instance():
+    scaled = Term("x", -2.0, main=True, param="w_x")
+    cls = lamp_task("weighted", params={"seconds": 0.2, "w_x": 0.5}, terms=(scaled,))
+    assert [t.weight for t in cls().terms] == [-1.0]
+    assert [t.weight for t in cls(w_x=3.0).terms] == [-6.0]
+    assert cls.terms == (scaled,)                   # the class keeps the declaration
 
 
 def test_phase_in_ramps_style_terms():
@@ -96,14 +103,9 @@ def test_limbo_pole_comes_down_over_the_curriculum():
 
 
 def test_a_curriculum_must_name_a_numeric_parameter():
-    class Bad(gpmotion.Task):
-        name = "bad_curriculum"
-        figure = "lamp"
-        params = {"seconds": 0.2}
-        terms = (Term("x", 1.0, main=True),)
-        curriculum = {"height": gpmotion.Ease(1.0, (0.0, 0.5))}
+    bad = lamp_task("bad_curriculum", curriculum={"height": gpmotion.Ease(1.0, (0.0, 0.5))})
     with pytest.raises(ValueError, match="curriculum names 'height'"):
-        Bad()
+        bad()
 
 
 # ---- versioned ids ---------------------------------------------------------------
@@ -197,25 +199,17 @@ def test_each_task_owns_its_figure():
     ({"version": True}, "version must be an integer"),
     ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
     ({"primitives": ()}, "primitives must be a non-empty tuple"),
+    ({"terms": (Term("x", 1.0, main=True, param="w_x"),)}, r"unknown parameter\(s\) \['w_x'\]"),
 ])
 def test_register_task_rejects_bad_declarations(attrs, message):
     from gpmotion.task import register_task
-    cls = type("BadDecl", (gpmotion.Task,), {"name": "bad_decl", "figure": "lamp",
-                                             "terms": (Term("x", 1.0, main=True),), **attrs})
+    cls = lamp_task("bad_decl", **attrs)
     with pytest.raises(ValueError, match=message):
         register_task(cls)
 
 
 def test_a_task_naming_an_unknown_primitive_fails_the_contract():
-    class Unknown(gpmotion.Task):
-        name = "unknown_prim"
-        figure = "lamp"
-        params = {"seconds": 0.2}
-        primitives = gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",)
-        terms = (Term("x", 1.0, main=True),)
-
-        def measure(self, traj):
-            return {"x": np.zeros(traj.n_episodes)}
-
+    unknown = lamp_task("unknown_prim", primitives=gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",),
+                        measure=lambda self, traj: {"x": np.zeros(traj.n_episodes)})
     with pytest.raises(AssertionError, match="unknown primitive 'no_such_primitive'"):
-        check_task(Unknown)
+        check_task(unknown)
