@@ -35,7 +35,7 @@ import numpy as np
 from .. import cli_options
 from ..cli_options import Option, number
 from ..controllers import schedule
-from ..search.base import Search
+from ..search.base import GenerationalSearch
 from ..task import WORST
 from .base import Family, register_family
 
@@ -62,7 +62,7 @@ def _cma_options(seed: int, popsize: int | None) -> dict:
     return opts
 
 
-class CMAESSearch(Search):
+class CMAESSearch(GenerationalSearch):
     """CMA-ES over a keyframes family's normalized keys (module docstring)."""
     total_key = "generations"
 
@@ -97,18 +97,6 @@ class CMAESSearch(Search):
     @property
     def done(self) -> bool:
         return self.generation >= self.generations
-
-    @property
-    def total(self) -> int:
-        return self.generations
-
-    def progress_of(self, generation: int) -> float:
-        n = self.schedule or self.generations
-        return 1.0 if n == 1 else min(1.0, generation / (n - 1))
-
-    @property
-    def progress_span(self) -> int:
-        return max(1, (self.schedule or self.generations) - 1)
 
     def extend(self, total: int, schedule: int) -> None:
         self.schedule = schedule

@@ -254,3 +254,21 @@ class Search:
 
     def _load(self, state: dict) -> None:
         raise NotImplementedError
+
+
+class GenerationalSearch(Search):
+    """A search of ``generations`` generations whose run progress steps evenly
+    from 0 at generation 0 to 1 at the last generation of the schedule (GP, CMA-ES)."""
+    generations: int
+
+    @property
+    def total(self) -> int:
+        return self.generations
+
+    def progress_of(self, generation: int) -> float:
+        n = self.schedule or self.generations
+        return 1.0 if n == 1 else min(1.0, generation / (n - 1))
+
+    @property
+    def progress_span(self) -> int:
+        return max(1, (self.schedule or self.generations) - 1)

@@ -64,7 +64,7 @@ from ..gp.operators import (clean_costs, creep_constants, crossover_same_dof,
                             tournament_indices)
 from ..records import python_random_state_from_json, python_random_state_to_json
 from ..task import WORST
-from .base import Search
+from .base import GenerationalSearch
 
 STATE_FORMAT = "gp-search-v1"
 SELECTIONS = ("roulette", "tournament")
@@ -80,7 +80,7 @@ def genome_key(individual) -> tuple:
                  for t in individual)
 
 
-class GPSearch(Search):
+class GPSearch(GenerationalSearch):
     """Generational GP over one-tree-per-DOF individuals (Gritz & Hahn)."""
     total_key = "generations"
 
@@ -197,18 +197,6 @@ class GPSearch(Search):
             random.setstate(outer)
 
     # -- phases --------------------------------------------------------------
-    def progress_of(self, generation: int) -> float:
-        n = self.schedule or self.generations
-        return 1.0 if n == 1 else min(1.0, generation / (n - 1))
-
-    @property
-    def progress_span(self) -> int:
-        return max(1, (self.schedule or self.generations) - 1)
-
-    @property
-    def total(self) -> int:
-        return self.generations
-
     def extend(self, total: int, schedule: int) -> None:
         """Run to ``total`` generations; the phases keep spanning ``schedule``, so
         the added generations run at the final weights.  A finished search
