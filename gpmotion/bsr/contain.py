@@ -98,20 +98,12 @@ class EnrichedSerialSearch(SerialSearch):
     def _tell(self, ev) -> None:
         if self.working is not None:
             return super()._tell(ev)
-        if self.pending is None:
-            raise RuntimeError("tell() without a pending ask()")
-        costs = np.array(ev.costs, dtype=np.float64).ravel()
-        n = len(self.pending)
-        extras = [None] * n if ev.extras is None else list(ev.extras)
-        if costs.size != n or len(extras) != n:
-            raise ValueError(f"tell: expected {n} costs and extras, got {costs.size} and {len(extras)}")
-        self.evaluations += n
+        costs, extras = self._told(ev)
+        self.evaluations += len(costs)
         if self.pool is not None:
             self.round += 1
         self.pool, self.pending = [list(self.pending), costs, extras], None
-        i = max(range(n), key=lambda k: (self._key(costs[k]), -k))
-        if self.best_genome is None or self._better(costs[i], self.best_score):
-            self.best_genome, self.best_score = self.family.copy(self.pool[0][i]), float(costs[i])
+        self._keep_best(self.pool[0], costs)
         if self.round >= self.rounds:
             keys = np.array([self._key(c) for c in costs])
             top = np.argsort(-keys, kind="stable")[:self.n_working]

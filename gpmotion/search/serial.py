@@ -185,16 +185,27 @@ class SerialSearch(Search):
     def _stale(self) -> bool:
         return self.current_phase() != self.phase
 
-    def _tell(self, ev) -> None:
-        """Costs (and extras) for the candidates of the last ask."""
+    def _told(self, ev) -> tuple[np.ndarray, list]:
+        """The costs and extras of the last ask's candidates, checked."""
         if self.pending is None:
             raise RuntimeError("tell() without a pending ask()")
         scores = np.array(ev.costs, dtype=np.float64).ravel()
         n = len(self.pending)
         extras = [None] * n if ev.extras is None else list(ev.extras)
         if scores.size != n or len(extras) != n:
-            raise ValueError(f"tell: expected {n} scores and extras, got "
-                             f"{scores.size} and {len(extras)}")
+            raise ValueError(f"tell: expected {n} costs and extras, got {scores.size} and {len(extras)}")
+        return scores, extras
+
+    def _keep_best(self, genomes, scores) -> None:
+        """The best of these (the first on ties) becomes the best so far if it beats it."""
+        i = max(range(len(genomes)), key=lambda k: (self._key(scores[k]), -k))
+        if self.best_genome is None or self._better(scores[i], self.best_score):
+            self.best_genome, self.best_score = self.family.copy(genomes[i]), float(scores[i])
+
+    def _tell(self, ev) -> None:
+        """Costs (and extras) for the candidates of the last ask."""
+        scores, extras = self._told(ev)
+        n = len(extras)
         if self.rescoring:
             self._tell_rescored(scores, extras)
             return
@@ -209,9 +220,7 @@ class SerialSearch(Search):
             self.generation += 1
         self.pending = None
         self.evaluations += n
-        i = max(range(n), key=lambda k: (self._key(self.scores[k]), -k))
-        if self.best_genome is None or self._better(self.scores[i], self.best_score):
-            self.best_genome, self.best_score = self.family.copy(self.working[i]), float(self.scores[i])
+        self._keep_best(self.working, self.scores)
         if self.generation > 0 and self.generation % self.reseed_every == 0:
             self._reseed()
         self.history.append((self.evaluations, self.best_score))
@@ -221,9 +230,7 @@ class SerialSearch(Search):
         c = self.n_working
         self.scores, self.extras = scores[:c].copy(), extras[:c]
         self.best_score = float(scores[c])
-        i = max(range(c), key=lambda k: (self._key(self.scores[k]), -k))
-        if self._better(self.scores[i], self.best_score):
-            self.best_genome, self.best_score = self.family.copy(self.working[i]), float(self.scores[i])
+        self._keep_best(self.working, self.scores)
         self.phase, self.rescoring, self.pending = self.current_phase(), False, None
         self.evaluations += c + 1
         self.history.append((self.evaluations, self.best_score))
