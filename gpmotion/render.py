@@ -263,10 +263,18 @@ def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
     body = _figure_body(ax, seg[frames[0]], rad, colormaps["Blues"](0.85))
     clock = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top",
                     family="monospace", fontsize=9)
+    return record_gif(path, fig, clock, lambda i: body.set_verts(capsules(seg[i], rad)),
+                      frames, durations, t, speed)
+
+
+def record_gif(path, fig, clock, pose, frames, durations, times, speed) -> int:
+    """Draw each frame (``pose(i)`` moves the figure to frame i, ``clock`` shows
+    its time), quantize it to a palette as it is drawn, write the GIF; returns
+    the number of frames written."""
     images = []
     for i in frames:
-        body.set_verts(capsules(seg[i], rad))
-        clock.set_text(f"t = {t[i]:5.2f} s\n{speed_text(speed)}")
+        pose(i)
+        clock.set_text(f"t = {times[i]:5.2f} s\n{speed_text(speed)}")
         fig.canvas.draw()
         rgba = np.asarray(fig.canvas.buffer_rgba())
         images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
@@ -309,6 +317,11 @@ def curve(path, generations_or_evals, best, median=None, xlabel: str = "generati
     if median is not None:
         _, ym = _finite_xy(x, median, "median")
         ax.plot(x, ym, lw=1.2, ls="--", label="median")
+    _save_curves(fig, ax, path, xlabel, ylabel, title, dpi)
+
+
+def _save_curves(fig, ax, path, xlabel, ylabel, title, dpi) -> None:
+    """Label, grid and legend a plot of learning curves, then write it."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
@@ -340,14 +353,7 @@ def curves_band(path, series: Mapping[str, tuple], xlabel: str = "generation",
         drawn += np.isfinite(q50).any()
     if not drawn:
         raise ValueError("curves_band: every median value is NaN/inf")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    if title:
-        ax.set_title(title)
-    fig.set_layout_engine("constrained")
-    _save_png(fig, path, dpi)
+    _save_curves(fig, ax, path, xlabel, ylabel, title, dpi)
 
 
 # ------------------------------------------------------- a run's curve.png

@@ -31,14 +31,13 @@ from matplotlib.gridspec import GridSpec
 from matplotlib.ticker import MaxNLocator, NullFormatter
 from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
-from PIL import Image
 
 from gpmotion.records import atomic_output
 
 GRID = 0.25          # ground grid spacing (m)
 from .frames import (choose_frames, crossing_events, event_labels, flight_events,  # noqa: E402
-                     gif_timing, speed_text)
-from .render import _check_motion, pole_text, save_gif  # noqa: E402  (shared with the planar renderer)
+                     gif_timing)
+from .render import _check_motion, pole_text, record_gif  # noqa: E402  (shared with the planar renderer)
 
 _MAX_GRID_LINES = 40
 
@@ -332,18 +331,12 @@ def animate3d(path, segments, radii, times, *, ground_z=0.0, goal=None, goal_lab
     lines, dots = _draw_figure(ax, seg[frames[0]], rad, colormaps["Blues"](0.85), ppm)
     clock = ax.text2D(0.02, 0.97, "", transform=ax.transAxes, va="top",
                       family="monospace", fontsize=9)
-    images = []
-    for i in frames:
+
+    def pose(i):
         lines.set_segments(seg[i])
         p = seg[i].reshape(-1, 3)
         dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
-        clock.set_text(f"t = {t[i]:5.2f} s\n{speed_text(speed)}")
-        fig.canvas.draw()
-        rgba = np.asarray(fig.canvas.buffer_rgba())
-        images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
-            256, method=Image.Quantize.MEDIANCUT))
-    save_gif(path, images, durations)
-    return len(images)
+    return record_gif(path, fig, clock, pose, frames, durations, t, speed)
 
 
 # ------------------------------------------------------------- dispatcher

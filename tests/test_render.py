@@ -8,6 +8,7 @@ import pytest
 from PIL import Image, ImageSequence
 
 from gpmotion import render
+from tests.image_checks import no_temp_files, open_image
 
 RADII = np.array([0.06, 0.05, 0.04])
 
@@ -24,17 +25,6 @@ def swinging_chain(n_frames=60, duration=2.0):
         segs.append(np.stack([p, q], 1))
         p = q
     return np.stack(segs, 1), t
-
-
-def open_image(path):
-    assert path.exists() and path.stat().st_size > 0
-    with Image.open(path) as im:
-        im.load()
-        return im
-
-
-def no_temp_files(directory):
-    return [p.name for p in directory.iterdir() if p.name.endswith(".tmp")] == []
 
 
 def test_capsule_is_as_thick_as_its_radius():
@@ -54,7 +44,7 @@ def test_filmstrip_writes_png(tmp_path, strip):
     render.filmstrip(out, seg, RADII, t, poles=[[0.6, 1.2, 0.05]], goal=(1.0, 0.0),
                      title="swing", labels=["start"] + [None] * (len(t) - 1),
                      strip=strip)
-    im = open_image(out)
+    im, _ = open_image(out)
     assert im.format == "PNG"
     assert im.size[0] >= 7 * 120 and im.size[1] > 100
     assert no_temp_files(tmp_path)
@@ -80,7 +70,7 @@ def test_filmstrip_skips_nan_frames(tmp_path):
     seg[10:30] = np.nan
     seg[-1, 1, 0, 0] = np.inf
     render.filmstrip(tmp_path / "f.png", seg, RADII, t, n_frames=8)
-    assert open_image(tmp_path / "f.png").format == "PNG"
+    assert open_image(tmp_path / "f.png")[0].format == "PNG"
 
 
 @pytest.mark.parametrize("bad", [
@@ -185,11 +175,11 @@ def test_curve_and_band(tmp_path):
     best[3] = np.nan
     best[4] = np.inf
     render.curve(tmp_path / "curve.png", g, best, median=best * 2, title="lamp hop")
-    assert open_image(tmp_path / "curve.png").format == "PNG"
+    assert open_image(tmp_path / "curve.png")[0].format == "PNG"
     series = {"gp": (g, best * 0.8, best, best * 1.2),
               "bsr": (g, g * 0 + 1.0, g * 0 + 2.0, g * 0 + 3.0)}
     render.curves_band(tmp_path / "band.png", series, "evaluations", "score")
-    assert open_image(tmp_path / "band.png").format == "PNG"
+    assert open_image(tmp_path / "band.png")[0].format == "PNG"
 
 
 def test_curve_rejects_empty_or_mismatched(tmp_path):

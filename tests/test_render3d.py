@@ -10,6 +10,7 @@ from PIL import Image, ImageSequence
 import gpmotion
 from gpmotion import render3d
 from gpmotion.figures import load_spec, planar_spec_to_3d
+from tests.image_checks import no_temp_files, open_image
 
 RADII = np.array([0.06, 0.05, 0.04])
 LAMP = Path(gpmotion.__file__).parent / "figures" / "lamp.toml"
@@ -28,17 +29,6 @@ def walking_chain(n_frames=40, duration=2.0):
         segs.append(np.stack([p, q], 1))
         p = q
     return np.stack(segs, 1), t
-
-
-def open_image(path):
-    assert path.exists() and path.stat().st_size > 0
-    with Image.open(path) as im:
-        im.load()
-        return im, getattr(im, "n_frames", 1)
-
-
-def no_temp_files(directory):
-    return [p.name for p in directory.iterdir() if p.name.endswith(".tmp")] == []
 
 
 @pytest.mark.parametrize("strip", [True, False])
