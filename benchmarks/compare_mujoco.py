@@ -14,8 +14,7 @@
    ``mujoco.mj_step`` (:func:`mujoco_gp_loop`).  Bar: ours ≥ 10× that loop on
    one thread; goal ≥ 25×.
 3. **Humanoid** (``humanoid``): the 3-D humanoid ``herman`` (29 links, fixed
-   pelvis, 6 foot contacts; a similar humanoid of our own if herman is not
-   registered) with sine targets on every actuator, ours vs MuJoCo's C
+   pelvis, 6 foot contacts) with sine targets on every actuator, ours vs MuJoCo's C
    ``rollout`` — model generated from the compiled 3-D arrays
    (:func:`mjcf_from_figure3d`).  Bar: ours ≥ 0.5× MuJoCo on one thread;
    goal: faster.
@@ -104,75 +103,109 @@ def _f(*xs):
     return " ".join(f"{float(x):.17g}" for x in xs)
 
 
-def mjcf_from_figure(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator="Euler",
-                     dt=1e-3) -> str:
-    """An MJCF string for a compiled planar gpmotion figure (see the module doc)."""
-    m = fig.model
-    nl = len(m.parent)
-    children = {i: [] for i in range(-1, nl)}
-    for i in range(nl):
-        children[int(m.parent[i])].append(i)
-    # a massless link whose only child sits at its origin lends its joint to that child's body
-    merged_into = {}
-    for i in range(nl):
-        kids = children[i]
-        if (m.mass[i] == 0.0 and len(kids) == 1 and not np.any(m.xtree[kids[0]])):
-            merged_into[i] = kids[0]
-    axis = {REVOLUTE: "0 -1 0", SLIDE_X: "1 0 0", SLIDE_Z: "0 0 1"}
-    names = fig.link_names
+class _MJCF:
+    """What the planar and 3-D MJCF writers share: one body per link (a
+    massless link whose only child sits at its origin lends its joint to that
+    child's body), an ``<inertial>`` per massive link, a small sphere per
+    contact point, ``<position>`` servos and the ground plane.  A subclass
+    says how its model's links are placed, jointed and weighed."""
+    compiler = ""               # extra attributes of <compiler>
 
-    def joint_xml(i):
-        kind = "hinge" if m.jtype[i] == REVOLUTE else "slide"
-        lim = ""
-        if np.isfinite(m.lo[i]) and np.isfinite(m.hi[i]):
-            lim = f' limited="true" range="{_f(m.lo[i], m.hi[i])}"'
-        return (f'<joint name="{names[i]}" type="{kind}" axis="{axis[int(m.jtype[i])]}"'
-                f' damping="{_f(m.damping[i])}"{lim}/>')
+    def __init__(self, fig, contact_radius):
+        self.fig, self.m, self.names, self.contact_radius = fig, fig.model, fig.link_names, contact_radius
 
-    def body_xml(first, depth):
+    def xml(self, scene, integrator, dt) -> str:
+        m = self.m
+        nl = len(m.parent)
+        children = {i: [] for i in range(-1, nl)}
+        for i in range(nl):
+            children[int(m.parent[i])].append(i)
+        merged_into = {i: children[i][0] for i in range(nl)
+                       if m.mass[i] == 0.0 and len(children[i]) == 1 and self.lends_joint(i, children[i][0])}
+        bodies = []
+        for c in children[-1]:
+            bodies += self._body(c, 2, children, merged_into, scene)
+        acts = []
+        for a in range(len(m.act_dof)):
+            joint, d = self.servo(a)
+            acts.append(f'    <position joint="{joint}" kp="{_f(m.kp[a])}" kv="{_f(m.kd[a])}" '
+                        f'ctrllimited="true" ctrlrange="{_f(m.lo[d], m.hi[d])}" '
+                        f'forcelimited="true" forcerange="{_f(-m.tau_max[a], m.tau_max[a])}"/>')
+        ground = ""
+        if scene.ground:
+            ground = (f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {_f(scene.ground_z)}" '
+                      f'contype="0" conaffinity="1"/>')
+        return "\n".join([
+            f'<mujoco model="{self.fig.name}">',
+            f'  <compiler angle="radian" inertiafromgeom="false"{self.compiler}/>',
+            f'  <option timestep="{_f(dt)}" gravity="0 0 {_f(-scene.gravity)}" integrator="{integrator}"/>',
+            "  <worldbody>", ground, *bodies, "  </worldbody>",
+            "  <actuator>", *acts, "  </actuator>",
+            "</mujoco>"])
+
+    def _body(self, first, depth, children, merged_into, scene) -> list[str]:
+        m = self.m
         chain = [first]
         while chain[-1] in merged_into:
             chain.append(merged_into[chain[-1]])
         i = chain[-1]                         # the link that owns the mass
-        a0, rx, rz = m.xtree[first]
         pad = "  " * depth
-        out = [f'{pad}<body name="link_{names[i]}" pos="{_f(rx, 0.0, rz)}" '
-               f'axisangle="0 -1 0 {float(a0):.17g}">']
-        out += [pad + "  " + joint_xml(j) for j in chain]
+        out = [f'{pad}<body name="link_{self.names[i]}" {self.placement(first)}>']
+        out += [pad + "  " + self.joint(j) for j in chain]
         if m.mass[i] > 0:
-            I = max(float(m.icom[i]), 1e-9)
-            out.append(f'{pad}  <inertial pos="{_f(m.com[i, 0], 0.0, m.com[i, 1])}" '
-                       f'mass="{_f(m.mass[i])}" diaginertia="{_f(I, I, I)}"/>')
+            out.append(f'{pad}  <inertial {self.inertial(i)}/>')
         for k in range(len(m.cp_link)):
             if m.cp_link[k] == i:
-                out.append(f'{pad}  <geom name="cp_{fig.contact_names[k]}" type="sphere" '
-                           f'size="{contact_radius}" '
-                           f'pos="{_f(m.cp_pos[k, 0], 0.0, m.cp_pos[k, 1])}" contype="1" '
+                out.append(f'{pad}  <geom name="cp_{self.fig.contact_names[k]}" type="sphere" '
+                           f'size="{self.contact_radius}" pos="{self.contact_pos(k)}" contype="1" '
                            f'conaffinity="0" condim="3" friction="{_f(scene.mu)} 0.005 0.0001"/>')
         for c in children[i]:
-            out += body_xml(c, depth + 1)
+            out += self._body(c, depth + 1, children, merged_into, scene)
         out.append(f"{pad}</body>")
         return out
 
-    bodies = []
-    for c in children[-1]:
-        bodies += body_xml(c, 2)
-    acts = []
-    for a, i in enumerate(m.act_dof):
-        acts.append(f'    <position joint="{names[i]}" kp="{_f(m.kp[a])}" kv="{_f(m.kd[a])}" '
-                    f'ctrllimited="true" ctrlrange="{_f(m.lo[i], m.hi[i])}" '
-                    f'forcelimited="true" forcerange="{_f(-m.tau_max[a], m.tau_max[a])}"/>')
-    ground = ""
-    if scene.ground:
-        ground = (f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {_f(scene.ground_z)}" '
-                  f'contype="0" conaffinity="1"/>')
-    return "\n".join([
-        f'<mujoco model="{fig.name}">',
-        '  <compiler angle="radian" inertiafromgeom="false"/>',
-        f'  <option timestep="{_f(dt)}" gravity="0 0 {_f(-scene.gravity)}" integrator="{integrator}"/>',
-        "  <worldbody>", ground, *bodies, "  </worldbody>",
-        "  <actuator>", *acts, "  </actuator>",
-        "</mujoco>"])
+    def _limits(self, d) -> str:
+        m = self.m
+        if np.isfinite(m.lo[d]) and np.isfinite(m.hi[d]):
+            return f' limited="true" range="{_f(m.lo[d], m.hi[d])}"'
+        return ""
+
+
+class _PlanarMJCF(_MJCF):
+    """Planar links: hinges about −y, slides along x and z, placed by ``xtree``."""
+    axis = {REVOLUTE: "0 -1 0", SLIDE_X: "1 0 0", SLIDE_Z: "0 0 1"}
+
+    def lends_joint(self, i, child) -> bool:
+        return not np.any(self.m.xtree[child])
+
+    def placement(self, i) -> str:
+        a0, rx, rz = self.m.xtree[i]
+        return f'pos="{_f(rx, 0.0, rz)}" axisangle="0 -1 0 {float(a0):.17g}"'
+
+    def joint(self, i) -> str:
+        m = self.m
+        kind = "hinge" if m.jtype[i] == REVOLUTE else "slide"
+        return (f'<joint name="{self.names[i]}" type="{kind}" axis="{self.axis[int(m.jtype[i])]}"'
+                f' damping="{_f(m.damping[i])}"{self._limits(i)}/>')
+
+    def inertial(self, i) -> str:
+        m = self.m
+        inertia = max(float(m.icom[i]), 1e-9)
+        return (f'pos="{_f(m.com[i, 0], 0.0, m.com[i, 1])}" mass="{_f(m.mass[i])}" '
+                f'diaginertia="{_f(inertia, inertia, inertia)}"')
+
+    def contact_pos(self, k) -> str:
+        return _f(self.m.cp_pos[k, 0], 0.0, self.m.cp_pos[k, 1])
+
+    def servo(self, a) -> tuple[str, int]:
+        i = int(self.m.act_dof[a])
+        return self.names[i], i
+
+
+def mjcf_from_figure(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator="Euler",
+                     dt=1e-3) -> str:
+    """An MJCF string for a compiled planar gpmotion figure (see the module doc)."""
+    return _PlanarMJCF(fig, contact_radius).xml(scene, integrator, dt)
 
 
 def _initial_states(mj, model, qpos, qvel):
@@ -197,32 +230,30 @@ def _best(fn, repeats):
     return best
 
 
-def compare_lamp(episodes, seconds, repeats, threads, seed=0):
+def race(fig, scene, xml, sines, n_steps, dt, repeats, threads):
+    """Ours vs MuJoCo's C ``rollout`` (model ``xml``) on the same per-episode sine
+    targets, changing every step, from the figure's default pose at rest; best of
+    ``repeats`` timings on one thread and on ``threads``.  Returns our trajectory,
+    the MuJoCo model, its states [episodes, steps, state] and the rates."""
     import mujoco as mj
     from mujoco import rollout as mjr
 
-    fig = gpmotion.load_figure("lamp")
-    scene = gpmotion.make_scene()
-    dt = 1e-3
-    n_steps = int(round(seconds / dt))
-    off, amp, om, ph = sine_workload(fig, episodes, seed)
+    off, amp, om, ph = sines
+    episodes = len(off)
     # --- ours
     ctrl = schedule.sines(off, amp, om, ph)
     run = lambda th: gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, dt=dt, threads=th)
     tr = run(1)
     ours1 = _best(lambda: run(1), repeats)
     oursn = _best(lambda: run(threads), repeats)
-    # --- MuJoCo
-    xml = mjcf_from_figure(fig, scene, dt=dt)
+    # --- MuJoCo: the same targets precomputed as its control array
     model = mj.MjModel.from_xml_string(xml)
     t = np.arange(n_steps) * dt
-    control = off[:, None, :] + amp[:, None, :] * np.sin(om[:, None, :] * t[None, :, None]
-                                                         + ph[:, None, :])
-    control = np.ascontiguousarray(control)
+    control = np.ascontiguousarray(off[:, None, :] + amp[:, None, :] *
+                                   np.sin(om[:, None, :] * t[None, :, None] + ph[:, None, :]))
     init = _initial_states(mj, model, np.tile(fig.q_default, (episodes, 1)),
-                           np.zeros((episodes, fig.nq)))
-    nstate = init.shape[1]
-    state = np.zeros((episodes, n_steps, nstate))
+                           np.zeros((episodes, fig.nv)))
+    state = np.zeros((episodes, n_steps, init.shape[1]))
     sens = np.zeros((episodes, n_steps, 0))
     data1 = mj.MjData(model)
     datan = [mj.MjData(model) for _ in range(threads)]
@@ -236,6 +267,26 @@ def compare_lamp(episodes, seconds, repeats, threads, seed=0):
         mujoco1 = _best(mj1, repeats)
         mjn()
         mujocon = _best(mjn, repeats)
+    steps = episodes * n_steps
+    rates = {"ours_steps_per_s": steps / ours1,
+             "ours_steps_per_s_all_threads": steps / oursn,
+             "mujoco_steps_per_s": steps / mujoco1,
+             "mujoco_steps_per_s_all_threads": steps / mujocon,
+             "ratio_one_thread": mujoco1 / ours1,
+             "ratio_all_threads": mujocon / oursn,
+             "threads": threads}
+    return tr, model, state, rates
+
+
+def compare_lamp(episodes, seconds, repeats, threads, seed=0):
+    import mujoco as mj
+
+    fig = gpmotion.load_figure("lamp")
+    scene = gpmotion.make_scene()
+    dt = 1e-3
+    n_steps = int(round(seconds / dt))
+    tr, model, state, rates = race(fig, scene, mjcf_from_figure(fig, scene, dt=dt),
+                                   sine_workload(fig, episodes, seed), n_steps, dt, repeats, threads)
     # how much contact MuJoCo saw (episode 0, every 10th step) and how far it went
     d = mj.MjData(model)
     ncon = []
@@ -244,21 +295,14 @@ def compare_lamp(episodes, seconds, repeats, threads, seed=0):
         mj.mj_forward(model, d)
         ncon.append(d.ncon)
     ncon = np.array(ncon)
-    steps = episodes * n_steps
     touching = tr.contact_force.sum(axis=-1) > 0
     return {
         "workload": {"figure": "lamp", "episodes": episodes, "steps_per_episode": n_steps,
                      "dt": dt, "controls": "per-episode random sines, changing every step",
                      "mujoco_integrator": "Euler", "mujoco_nq": model.nq, "mujoco_nu": model.nu},
-        "ours_steps_per_s": steps / ours1,
-        "ours_steps_per_s_all_threads": steps / oursn,
-        "mujoco_steps_per_s": steps / mujoco1,
-        "mujoco_steps_per_s_all_threads": steps / mujocon,
-        "ratio_one_thread": mujoco1 / ours1,
-        "ratio_all_threads": mujocon / oursn,
-        "threads": threads,
+        **rates,
         "bar_one_thread": 3.0,
-        "meets_bar": bool(mujoco1 / ours1 >= 3.0),
+        "meets_bar": bool(rates["ratio_one_thread"] >= 3.0),
         "ours_contact_frames": float(touching.mean()),
         "mujoco_contact_frames": float((ncon > 0).mean()),
         "mujoco_mean_contacts": float(ncon.mean()),
@@ -419,26 +463,26 @@ DOUBLE_PENDULUM = {
 }
 
 
-def pendulum_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
-    """Max |Δθ| between the engines for a passive double pendulum (no contact)."""
+def crosscheck(fig, mjcf, integrators, seconds, q0, dt) -> dict:
+    """Max |Δθ| between the engines for a passive figure without ground, from
+    joint angles ``q0`` at rest, under each MuJoCo integrator (``mjcf``: the
+    figure's MJCF writer), and ours against ourselves at half the step."""
     import mujoco as mj
 
-    fig = gpmotion.load_figure(DOUBLE_PENDULUM)
     scene = gpmotion.make_scene(ground=False)
     n = int(round(seconds / dt))
     tr = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt, record_every=1)
-    ours = tr.q[0]                               # [n+1, 2], row k after k steps
+    ours = tr.q[0]                               # [n+1, nq], row k after k steps
     out = {"seconds": seconds, "q0": list(q0), "dt": dt}
-    for integ in ("Euler", "RK4", "implicitfast"):
-        model = mj.MjModel.from_xml_string(mjcf_from_figure(fig, scene, integrator=integ, dt=dt))
+    for integ in integrators:
+        model = mj.MjModel.from_xml_string(mjcf(fig, scene, integrator=integ, dt=dt))
         d = mj.MjData(model)
         d.qpos[:] = q0
         theirs = [d.qpos.copy()]
         for _ in range(n):
             mj.mj_step(model, d)
             theirs.append(d.qpos.copy())
-        theirs = np.array(theirs)
-        out[f"max_angle_diff_{integ}"] = float(np.abs(theirs - ours).max())
+        out[f"max_angle_diff_{integ}"] = float(np.abs(np.array(theirs) - ours).max())
     # the same comparison for ourselves at half the step: how big an O(dt) gap is
     half = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt / 2, record_every=2)
     out["ours_dt_vs_dt_half"] = float(np.abs(half.q[0] - ours).max())
@@ -446,7 +490,54 @@ def pendulum_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
     return out
 
 
+def pendulum_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
+    """Max |Δθ| between the engines for a passive double pendulum (no contact)."""
+    return crosscheck(gpmotion.load_figure(DOUBLE_PENDULUM), mjcf_from_figure,
+                      ("Euler", "RK4", "implicitfast"), seconds, q0, dt)
+
+
 # ------------------------------------------------------------------ 3-D: the humanoid
+
+class _SpatialMJCF(_MJCF):
+    """3-D links (``Model3D`` arrays): placed at ``xpos``, turned by ``xrot``."""
+    compiler = ' autolimits="false"'
+
+    def lends_joint(self, i, child) -> bool:
+        from gpmotion.model import FREE3D
+        m = self.m
+        return (not np.any(m.xpos[child]) and np.allclose(m.xrot[child], np.eye(3), atol=0, rtol=0)
+                and m.jtype[i] != FREE3D)
+
+    def placement(self, i) -> str:
+        from gpmotion.figures.spec3d import rot_to_quat
+        return f'pos="{_f(*self.m.xpos[i])}" quat="{_f(*rot_to_quat(self.m.xrot[i]))}"'
+
+    def joint(self, i) -> str:
+        from gpmotion.model import FREE3D, HINGE3D
+        m = self.m
+        if m.jtype[i] == FREE3D:
+            return f'<freejoint name="{self.names[i]}"/>'
+        d = int(m.dadr[i])
+        kind = "hinge" if m.jtype[i] == HINGE3D else "slide"
+        return (f'<joint name="{self.names[i]}" type="{kind}" axis="{_f(*m.axis[i])}"'
+                f' damping="{_f(m.damping[d])}"{self._limits(d)}/>')
+
+    def inertial(self, i) -> str:
+        m = self.m
+        inertia = m.icom[i]
+        return (f'pos="{_f(*m.com[i])}" mass="{_f(m.mass[i])}" fullinertia="'
+                f'{_f(*inertia[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]])}"')
+
+    def contact_pos(self, k) -> str:
+        return _f(*self.m.cp_pos[k])
+
+    def servo(self, a) -> tuple[str, int]:
+        from gpmotion.model import FREE3D
+        m = self.m
+        d = int(m.act_dof[a])
+        link = int(np.nonzero((m.dadr == d) & (m.jtype != FREE3D))[0][0])
+        return self.names[link], d
+
 
 def mjcf_from_figure3d(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator="Euler",
                        dt=1e-3) -> str:
@@ -464,124 +555,7 @@ def mjcf_from_figure3d(fig, scene, *, contact_radius=CONTACT_RADIUS, integrator=
     forcerange = ± torque limit), contact points 1 mm spheres against a
     plane (μ = the scene's), integrator Euler, no visual geoms.
     """
-    from gpmotion.figures.spec3d import rot_to_quat
-    from gpmotion.model import FREE3D, HINGE3D
-    m = fig.model
-    nl = len(m.parent)
-    children = {i: [] for i in range(-1, nl)}
-    for i in range(nl):
-        children[int(m.parent[i])].append(i)
-    merged_into = {}
-    for i in range(nl):
-        kids = children[i]
-        if (m.mass[i] == 0.0 and len(kids) == 1 and not np.any(m.xpos[kids[0]])
-                and np.allclose(m.xrot[kids[0]], np.eye(3), atol=0, rtol=0)
-                and m.jtype[i] != FREE3D):
-            merged_into[i] = kids[0]
-    names = fig.link_names
-
-    def joint_xml(i):
-        if m.jtype[i] == FREE3D:
-            return f'<freejoint name="{names[i]}"/>'
-        d = int(m.dadr[i])
-        kind = "hinge" if m.jtype[i] == HINGE3D else "slide"
-        lim = ""
-        if np.isfinite(m.lo[d]) and np.isfinite(m.hi[d]):
-            lim = f' limited="true" range="{_f(m.lo[d], m.hi[d])}"'
-        return (f'<joint name="{names[i]}" type="{kind}" axis="{_f(*m.axis[i])}"'
-                f' damping="{_f(m.damping[d])}"{lim}/>')
-
-    def body_xml(first, depth):
-        chain = [first]
-        while chain[-1] in merged_into:
-            chain.append(merged_into[chain[-1]])
-        i = chain[-1]
-        pad = "  " * depth
-        out = [f'{pad}<body name="link_{names[i]}" pos="{_f(*m.xpos[first])}" '
-               f'quat="{_f(*rot_to_quat(m.xrot[first]))}">']
-        out += [pad + "  " + joint_xml(j) for j in chain]
-        if m.mass[i] > 0:
-            I = m.icom[i]
-            out.append(f'{pad}  <inertial pos="{_f(*m.com[i])}" mass="{_f(m.mass[i])}" '
-                       f'fullinertia="{_f(I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])}"/>')
-        for k in range(len(m.cp_link)):
-            if m.cp_link[k] == i:
-                out.append(f'{pad}  <geom name="cp_{fig.contact_names[k]}" type="sphere" '
-                           f'size="{contact_radius}" pos="{_f(*m.cp_pos[k])}" contype="1" '
-                           f'conaffinity="0" condim="3" friction="{_f(scene.mu)} 0.005 0.0001"/>')
-        for c in children[i]:
-            out += body_xml(c, depth + 1)
-        out.append(f"{pad}</body>")
-        return out
-
-    bodies = []
-    for c in children[-1]:
-        bodies += body_xml(c, 2)
-    acts = []
-    for a in range(len(m.act_dof)):
-        d = int(m.act_dof[a])
-        link = int(np.nonzero((m.dadr == d) & (m.jtype != FREE3D))[0][0])
-        acts.append(f'    <position joint="{names[link]}" kp="{_f(m.kp[a])}" kv="{_f(m.kd[a])}" '
-                    f'ctrllimited="true" ctrlrange="{_f(m.lo[d], m.hi[d])}" '
-                    f'forcelimited="true" forcerange="{_f(-m.tau_max[a], m.tau_max[a])}"/>')
-    ground = ""
-    if scene.ground:
-        ground = (f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {_f(scene.ground_z)}" '
-                  f'contype="0" conaffinity="1"/>')
-    return "\n".join([
-        f'<mujoco model="{fig.name}">',
-        '  <compiler angle="radian" inertiafromgeom="false" autolimits="false"/>',
-        f'  <option timestep="{_f(dt)}" gravity="0 0 {_f(-scene.gravity)}" integrator="{integrator}"/>',
-        "  <worldbody>", ground, *bodies, "  </worldbody>",
-        "  <actuator>", *acts, "  </actuator>",
-        "</mujoco>"])
-
-
-def humanoid_figure():
-    """herman when it is registered, else a similar humanoid of our own (fixed pelvis)."""
-    from gpmotion.figures import figure_names
-    if "herman" in figure_names():
-        return gpmotion.load_figure("herman")
-    return gpmotion.load_figure(FALLBACK_HUMANOID)
-
-
-def _fallback_humanoid():
-    g = dict(kp=300.0, kd=10.0, torque_limit=200.0)
-
-    def rod(name, length, mass, d):
-        return {"name": name, "mass": mass, "radius": 0.04,
-                "segment": [[0, 0, 0], [length * x for x in d]]}
-    B = [{"name": "pelvis", "mass": 10.0, "radius": 0.1, "segment": [[0, -0.12, 0], [0, 0.12, 0]]},
-         rod("torso", 0.45, 25.0, (0, 0, 1)), rod("head", 0.2, 5.0, (0, 0, 1))]
-    J = [dict(name="waist", parent="pelvis", child="torso", offset=[0, 0, 0.08], type="euler",
-              axes="yxz", limits=[-0.8, 0.8], **g),
-         dict(name="neck", parent="torso", child="head", offset=[0, 0, 0.45], type="euler",
-              axes="yz", limits=[-0.8, 0.8], **g)]
-    C = []
-    for side, y in (("l", 0.1), ("r", -0.1)):
-        B += [rod(f"thigh_{side}", 0.42, 7.0, (0, 0, -1)), rod(f"shin_{side}", 0.4, 3.5, (0, 0, -1)),
-              rod(f"foot_{side}", 0.2, 1.0, (1, 0, 0)), rod(f"upper_arm_{side}", 0.3, 2.0, (0, 0, -1)),
-              rod(f"fore_arm_{side}", 0.26, 1.1, (0, 0, -1)), rod(f"hand_{side}", 0.1, 0.4, (0, 0, -1))]
-        J += [dict(name=f"hip_{side}", parent="pelvis", child=f"thigh_{side}", offset=[0, y, 0],
-                   type="euler", axes="yxz", limits=[-1.5, 1.5], **g),
-              dict(name=f"knee_{side}", parent=f"thigh_{side}", child=f"shin_{side}",
-                   offset=[0, 0, -0.42], axis=[0, 1, 0], limits=[0.0, 2.5], **g),
-              dict(name=f"ankle_{side}", parent=f"shin_{side}", child=f"foot_{side}",
-                   offset=[0, 0, -0.4], type="euler", axes="yx", limits=[-0.8, 0.8], **g),
-              dict(name=f"shoulder_{side}", parent="torso", child=f"upper_arm_{side}",
-                   offset=[0, 2.2 * y, 0.38], type="euler", axes="yzx", limits=[-2.0, 2.0], **g),
-              dict(name=f"elbow_{side}", parent=f"upper_arm_{side}", child=f"fore_arm_{side}",
-                   offset=[0, 0, -0.3], axis=[0, -1, 0], limits=[0.0, 2.5], **g),
-              dict(name=f"wrist_{side}", parent=f"fore_arm_{side}", child=f"hand_{side}",
-                   offset=[0, 0, -0.26], type="euler", axes="yx", limits=[-0.8, 0.8], **g)]
-        C += [dict(name=f"heel_{side}", body=f"foot_{side}", position=[-0.05, 0, -0.03]),
-              dict(name=f"toe_{side}", body=f"foot_{side}", position=[0.2, 0, -0.03])]
-    return {"dimensions": 3, "name": "humanoid_bench",
-            "root": {"type": "fixed", "body": "pelvis", "position": [0, 0, 0.96]},
-            "bodies": B, "joints": J, "contacts": C}
-
-
-FALLBACK_HUMANOID = _fallback_humanoid()
+    return _SpatialMJCF(fig, contact_radius).xml(scene, integrator, dt)
 
 
 def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25, figure=None):
@@ -589,47 +563,18 @@ def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25
     a registered 3-D figure such as the creatures), sine targets on every
     actuator changing every step (amplitude ``amplitude`` × the sine
     workload's), one thread and all threads."""
-    import mujoco as mj
-    from mujoco import rollout as mjr
-
-    fig = gpmotion.load_figure(figure) if figure else humanoid_figure()
+    fig = gpmotion.load_figure(figure or "herman")
     scene = gpmotion.make_scene()
     dt = 1e-3
     n_steps = int(round(seconds / dt))
     off, amp, om, ph = sine_workload(fig, episodes, seed)
-    amp = amplitude * amp
-    ctrl = schedule.sines(off, amp, om, ph)
-    run = lambda th: gpmotion.rollout(fig, scene, ctrl, n_steps=n_steps, dt=dt, threads=th)
-    tr = run(1)
-    ours1 = _best(lambda: run(1), repeats)
-    oursn = _best(lambda: run(threads), repeats)
-    xml = mjcf_from_figure3d(fig, scene, dt=dt)
-    model = mj.MjModel.from_xml_string(xml)
+    tr, model, state, rates = race(fig, scene, mjcf_from_figure3d(fig, scene, dt=dt),
+                                   (off, amplitude * amp, om, ph), n_steps, dt, repeats, threads)
     assert model.nq == fig.nq and model.nu == fig.n_act, (model.nq, model.nu)
-    t = np.arange(n_steps) * dt
-    control = np.ascontiguousarray(off[:, None, :] + amp[:, None, :] *
-                                   np.sin(om[:, None, :] * t[None, :, None] + ph[:, None, :]))
-    init = _initial_states(mj, model, np.tile(fig.q_default, (episodes, 1)),
-                           np.zeros((episodes, fig.nv)))
-    state = np.zeros((episodes, n_steps, init.shape[1]))
-    sens = np.zeros((episodes, n_steps, 0))
-    data1 = mj.MjData(model)
-    datan = [mj.MjData(model) for _ in range(threads)]
-    with mjr.Rollout(nthread=0) as r1, mjr.Rollout(nthread=threads) as rn:
-        def mj1():
-            r1.rollout(model, data1, init, control, state=state, sensordata=sens)
-
-        def mjn():
-            rn.rollout(model, datan, init, control, state=state, sensordata=sens)
-        mj1()
-        mujoco1 = _best(mj1, repeats)
-        mjn()
-        mujocon = _best(mjn, repeats)
     # the engines' joint angles over the episode (PD-driven, so they stay close)
     q_mj = state[:, ::tr.record_every, 1:1 + fig.nq]
     F = min(q_mj.shape[1], tr.q.shape[1])
-    steps = episodes * n_steps
-    ratio = mujoco1 / ours1
+    ratio = rates["ratio_one_thread"]
     return {
         "workload": {"figure": fig.name, "episodes": episodes, "steps_per_episode": n_steps,
                      "dt": dt, "links": int(len(fig.model.parent)), "dofs": int(fig.nv),
@@ -638,13 +583,7 @@ def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25
                                  "the bench amplitudes), changing every step",
                      "mujoco_integrator": "Euler", "mujoco_nq": model.nq, "mujoco_nu": model.nu,
                      "mujoco_nbody": model.nbody},
-        "ours_steps_per_s": steps / ours1,
-        "ours_steps_per_s_all_threads": steps / oursn,
-        "mujoco_steps_per_s": steps / mujoco1,
-        "mujoco_steps_per_s_all_threads": steps / mujocon,
-        "ratio_one_thread": ratio,
-        "ratio_all_threads": mujocon / oursn,
-        "threads": threads,
+        **rates,
         "bar_one_thread": 0.5,
         "meets_bar": bool(ratio >= 0.5),
         "meets_goal": bool(ratio >= 1.0),
@@ -673,28 +612,9 @@ PENDULUM3D = {
 def pendulum3d_crosscheck(seconds=2.0, q0=(0.6, -0.4), dt=1e-3):
     """Max |Δθ| between the engines for a passive 3-D double pendulum whose second
     hinge axis is not parallel to the first (tilted, in a rotated joint frame)."""
-    import mujoco as mj
-
     fig = gpmotion.load_figure(PENDULUM3D)
-    scene = gpmotion.make_scene(ground=False)
-    n = int(round(seconds / dt))
-    tr = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt, record_every=1)
-    ours = tr.q[0]
-    out = {"seconds": seconds, "q0": list(q0), "dt": dt,
-           "axes_world_at_rest": [list(map(float, a)) for a in fig.model.axis]}
-    for integ in ("Euler", "RK4"):
-        model = mj.MjModel.from_xml_string(mjcf_from_figure3d(fig, scene, integrator=integ, dt=dt))
-        d = mj.MjData(model)
-        d.qpos[:] = q0
-        theirs = [d.qpos.copy()]
-        for _ in range(n):
-            mj.mj_step(model, d)
-            theirs.append(d.qpos.copy())
-        out[f"max_angle_diff_{integ}"] = float(np.abs(np.array(theirs) - ours).max())
-    half = gpmotion.simulate(fig, seconds, scene=scene, q0=np.array(q0), dt=dt / 2, record_every=2)
-    out["ours_dt_vs_dt_half"] = float(np.abs(half.q[0] - ours).max())
-    out["swing_amplitude"] = float(np.abs(ours).max())
-    return out
+    out = crosscheck(fig, mjcf_from_figure3d, ("Euler", "RK4"), seconds, q0, dt)
+    return {**out, "axes_world_at_rest": [list(map(float, a)) for a in fig.model.axis]}
 
 
 def format_summary(r: dict) -> str:

@@ -15,7 +15,8 @@ turns, has not completed), the jump clears the ground (every contact point
 ≥ 5 cm up at once), the shuffle moves the centre of mass ≥ 0.1 m right.
 (Our thresholds, stated here and printed.)
 
-    python benchmarks/composite.py --robust-timing   # K starts vs K single evaluations
+K perturbed starts against K single evaluations (``--robust-starts``) is
+timed by ``benchmarks/robust_timing.py``.
 """
 from __future__ import annotations
 
@@ -68,10 +69,7 @@ def main(argv=None):
     ap.add_argument("--H", type=int, default=4)
     ap.add_argument("--out", default="runs/composite-demo")
     ap.add_argument("--script", help="a script file instead of Table 4 with the controllers' durations")
-    ap.add_argument("--robust-timing", action="store_true")
     a = ap.parse_args(argv)
-    if a.robust_timing:
-        return robust_timing()
     if len(a.controllers) != 3:
         ap.error("give three controllers: CART JUMP SHUFFLE")
     out = Path(a.out)
@@ -106,29 +104,6 @@ def main(argv=None):
                "repaired": repaired, "done_ranges": {k: [lo, str(hi)] for k, (lo, hi) in DONE.items()}}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     print(f"wrote {out}/summary.json, careless/repaired .json and .png")
-
-
-def robust_timing(k=8, n=16):
-    """K perturbed starts per controller cost about K episodes of one batch (not more)."""
-    from gpmotion import get_task
-    from gpmotion.compose import robust
-    from gpmotion.families import make_family
-    task = get_task("starman_travel", seconds=2.0)
-    fam = make_family("bsr-time", task)
-    genomes = [fam.random(np.random.default_rng(i)) for i in range(n)]
-    robust.evaluate(task, fam, genomes, k=k, seed=0, round_=0)            # compile, warm caches
-
-    def best_of(f, n=3):           # the least disturbed of n runs (the machine is shared)
-        times = []
-        for _ in range(n):
-            t0 = time.perf_counter()
-            f()
-            times.append(time.perf_counter() - t0)
-        return min(times)
-    batched = best_of(lambda: robust.evaluate(task, fam, genomes, k=k, seed=0, round_=0))
-    single = best_of(lambda: [robust.evaluate(task, fam, genomes, k=1, seed=0, round_=r) for r in range(k)])
-    print(f"{n} controllers × {k} perturbed starts: {batched:.2f} s in one batch; "
-          f"{k} single-start evaluations: {single:.2f} s (ratio {batched / single:.2f})")
 
 
 if __name__ == "__main__":

@@ -103,15 +103,21 @@ def test_herman_bench_runs_the_gp_arm(capsys):
     assert r["controller"] == "sine" and r["tree_nodes"] is None and r["steps_per_s"] > 0
 
 
-def test_compare_mujoco_humanoid_smoke():
-    """benchmarks/compare_mujoco.py's humanoid workload and 3-D cross-check run (no timing asserts)."""
+def compare_mujoco():
+    """benchmarks/compare_mujoco.py as a module (skips the test without MuJoCo)."""
     pytest.importorskip("mujoco")
     import importlib.util
     from pathlib import Path
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare_mujoco.py"
-    spec = importlib.util.spec_from_file_location("compare_mujoco_under_test3d", path)
+    spec = importlib.util.spec_from_file_location("compare_mujoco_under_test", path)
     cm = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(cm)
+    return cm
+
+
+def test_compare_mujoco_humanoid_smoke():
+    """benchmarks/compare_mujoco.py's humanoid workload and 3-D cross-check run (no timing asserts)."""
+    cm = compare_mujoco()
     h = cm.compare_humanoid(episodes=2, seconds=0.05, repeats=1, threads=1)
     w = h["workload"]
     assert w["mujoco_nq"] == w["dofs"] and w["mujoco_nu"] == w["actuators"]
@@ -123,13 +129,7 @@ def test_compare_mujoco_humanoid_smoke():
 
 def test_compare_mujoco_gp_smoke():
     """benchmarks/compare_mujoco.py's GP workload runs (tiny; no timing assertions)."""
-    pytest.importorskip("mujoco")
-    import importlib.util
-    from pathlib import Path
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare_mujoco.py"
-    spec = importlib.util.spec_from_file_location("compare_mujoco_under_test", path)
-    cm = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(cm)
+    cm = compare_mujoco()
     g = cm.compare_lamp_gp(episodes=2, repeats=1, threads=1, py_episodes=1, seconds=0.05)
     assert g["ours_gp_steps_per_s"] > 0 and g["mujoco_gp_compile_steps_per_s"] > 0
     assert g["ratio_one_thread"] > 0 and g["workload"]["steps_per_episode"] == 50
