@@ -9,18 +9,11 @@ import pytest
 from gpmotion.cli import _run_configs, main, parser
 from gpmotion.cli_options import OPTIONS, Option, allow, collect, register_option
 from gpmotion.families import family_names
+from tests.cli_checks import one_line_error, refused_before_the_directory
 
 TINY = ["--param", "seconds=0.3", "--population", "12", "--generations", "2", "--quiet",
         "--no-artifacts"]
 SERIAL_TINY = ["--param", "seconds=0.3", "--generations", "3", "--quiet", "--no-artifacts"]
-
-
-def _one_line_error(capsys, *needles):
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("gpmotion: error:") and "\n" not in err, err
-    for n in needles:
-        assert n in err, (n, err)
-    return err
 
 
 @pytest.mark.parametrize("argv, needles", [
@@ -35,9 +28,8 @@ def _one_line_error(capsys, *needles):
 ])
 def test_an_option_that_does_not_apply_is_refused(argv, needles, tmp_path, capsys):
     out = tmp_path / "o"
-    assert main(["run", "lamp_hop", "--out", str(out), *argv, *SERIAL_TINY]) == 2
-    _one_line_error(capsys, *needles)
-    assert not out.exists()
+    refused_before_the_directory(capsys, ["run", "lamp_hop", "--out", str(out), *argv, *SERIAL_TINY],
+                                 out, *needles)
 
 
 @pytest.mark.parametrize("argv, needle", [
@@ -50,7 +42,7 @@ def test_an_option_that_does_not_apply_is_refused(argv, needles, tmp_path, capsy
 ])
 def test_gp_function_set_erc_and_tau_are_validated(argv, needle, tmp_path, capsys):
     assert main(["run", "lamp_hop", "--out", str(tmp_path / "o"), *argv, *SERIAL_TINY]) == 2
-    _one_line_error(capsys, needle)
+    one_line_error(capsys, needle)
 
 
 def test_every_applicable_option_reaches_the_run_config():
@@ -115,7 +107,7 @@ def test_version_help_and_python_dash_m(capsys):
     text = capsys.readouterr().out
     assert "--population" in text and "phase" in text and "best" in text
     assert main(["help", "rn"]) == 2
-    _one_line_error(capsys, "did you mean 'run'")
+    one_line_error(capsys, "did you mean 'run'")
     r = subprocess.run([sys.executable, "-m", "gpmotion", "--version"], capture_output=True,
                        text=True, timeout=120)
     assert r.returncode == 0 and r.stdout.startswith("gpmotion ")
@@ -128,7 +120,7 @@ def test_version_help_and_python_dash_m(capsys):
 ])
 def test_unknown_names_suggest_the_closest(argv, needle, capsys):
     assert main(argv) == 2
-    _one_line_error(capsys, needle)
+    one_line_error(capsys, needle)
 
 
 def test_show_prints_parameters_terms_and_senses(capsys):
@@ -145,7 +137,7 @@ def test_show_prints_parameters_terms_and_senses(capsys):
 
 def test_task_bounds_are_enforced(capsys):
     assert main(["run", "lamp_limbo", "--param", "pole_height=2"]) == 2
-    _one_line_error(capsys, "pole_height must be within 0.1..1")
+    one_line_error(capsys, "pole_height must be within 0.1..1")
 
 
 PLUGIN = '''import math
@@ -164,7 +156,7 @@ def test_check_only_plugins_checks_only_the_users(tmp_path, capsys, forget_plugi
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines == ["ok    primitive hypot_t"]
     assert main(["check", "--only-plugins"]) == 2
-    _one_line_error(capsys, "--only-plugins needs --plugins")
+    one_line_error(capsys, "--only-plugins needs --plugins")
 
 
 VARIANT = '''extends = "lamp"
@@ -196,10 +188,10 @@ def test_a_variant_missing_what_the_task_uses_is_refused(tmp_path, capsys):
     variant = tmp_path / "v.toml"
     variant.write_text('extends = "lamp"\nname = "v"\n[[joints]]\nname = "elbo"\nkp = 40.0\n')
     assert main(["run", "lamp_hop", "--figure", str(variant), "--out", str(tmp_path / "o")]) == 2
-    _one_line_error(capsys, "no such joint 'elbo' in lamp (did you mean 'elbow'?)")
+    one_line_error(capsys, "no such joint 'elbo' in lamp (did you mean 'elbow'?)")
     variant.write_text('extends = "starman"\nname = "v"\n')
     assert main(["run", "lamp_hop", "--figure", str(variant), "--out", str(tmp_path / "o")]) == 2
-    _one_line_error(capsys, "figure v lacks", "actuated joint 'shoulder'", "site 'base_centre'")
+    one_line_error(capsys, "figure v lacks", "actuated joint 'shoulder'", "site 'base_centre'")
     assert not (tmp_path / "o").exists()
 
 
@@ -216,10 +208,9 @@ def test_seeds_print_an_aggregate(tmp_path, capsys):
 
 def test_compare_refuses_a_gp_option_without_gp(tmp_path, capsys):
     out = tmp_path / "c"
-    assert main(["compare", "lamp_hop", "--controllers", "bsr-sense", "--population", "50",
-                 "--out", str(out)]) == 2
-    _one_line_error(capsys, "--population does not apply")
-    assert not out.exists()
+    refused_before_the_directory(capsys, ["compare", "lamp_hop", "--controllers", "bsr-sense",
+                                          "--population", "50", "--out", str(out)],
+                                 out, "--population does not apply")
 
 
 def _readme_commands():
@@ -250,13 +241,13 @@ def test_every_readme_command_parses_and_its_options_are_in_help():
 
 def test_a_variant_with_another_root_is_refused(capsys):
     assert main(["run", "herman_touch_object", "--figure", "herman_standing"]) == 2
-    _one_line_error(capsys, "free root", "fixed root")
+    one_line_error(capsys, "free root", "fixed root")
 
 
 def test_render_refuses_seconds_for_a_controller(tmp_path, capsys):
     (tmp_path / "best.json").write_text("{}")
     assert main(["render", str(tmp_path), "--seconds", "5", "-o", str(tmp_path / "x.png")]) == 2
-    _one_line_error(capsys, "--seconds applies to --figure")
+    one_line_error(capsys, "--seconds applies to --figure")
 
 
 def test_resume_of_a_series_folder_names_its_runs(tmp_path, capsys):
@@ -264,7 +255,7 @@ def test_resume_of_a_series_folder_names_its_runs(tmp_path, capsys):
         (tmp_path / "s" / f"seed{k}").mkdir(parents=True)
         (tmp_path / "s" / f"seed{k}" / "config.json").write_text("{}")
     assert main(["resume", str(tmp_path / "s")]) == 2
-    _one_line_error(capsys, "series of 2 runs", f"gpmotion resume {tmp_path / 's' / 'seed1'}")
+    one_line_error(capsys, "series of 2 runs", f"gpmotion resume {tmp_path / 's' / 'seed1'}")
 
 
 def test_family_options_from_a_file_are_validated():

@@ -5,6 +5,7 @@ import pytest
 import gpmotion
 from gpmotion.controllers import schedule
 from gpmotion.figures import planar_spec_to_3d
+from tests import batch_checks as B
 from tests import figures_for_tests as F
 from tests.reference import planar_ref as ref
 
@@ -283,26 +284,8 @@ def test_shipped_figures_come_to_rest_without_sinking(name):
 
 
 def test_a_batch_equals_its_episodes_run_alone():
-    fig = gpmotion.load_figure("lamp")
-    rng = np.random.default_rng(1)
-    off = fig.model.neutral + rng.uniform(-0.3, 0.3, (4, 3))
-    ctrl = schedule.sines(off, 0.4, rng.uniform(3, 12, (4, 3)), 0.0)
-    scene = gpmotion.make_scene()
-    batch = gpmotion.rollout(fig, scene, ctrl, n_steps=1500)
-    for e in range(4):
-        one = schedule.sines(off[e], 0.4, ctrl.cf[e, 6:9], 0.0)
-        single = gpmotion.rollout(fig, scene, one, n_steps=1500)
-        assert np.array_equal(batch.q[e], single.q[0])
-        assert np.array_equal(batch.contact_force[e], single.contact_force[0])
+    B.assert_a_batch_equals_its_episodes_run_alone(gpmotion.load_figure("lamp"), 1500)
 
 
 def test_divergence_flags_one_episode_and_spares_the_rest():
-    fig = gpmotion.load_figure("lamp")
-    q0 = np.tile(fig.q_default, (3, 1))
-    qd0 = np.zeros((3, fig.nq))
-    q0[1, 0], qd0[1, 0] = 9990.0, 5000.0        # absurd: leaves the sane box in a few ms
-    ctrl = schedule.stack([schedule.constant(fig.model.neutral)] * 3)
-    tr = gpmotion.rollout(fig, gpmotion.make_scene(), ctrl, n_steps=500, q0=q0, qd0=qd0)
-    assert list(tr.diverged) == [False, True, False]
-    assert 0 <= tr.diverged_step[1] < 10
-    assert np.array_equal(tr.q[0], tr.q[2]) and np.all(np.isfinite(tr.q))
+    B.assert_divergence_flags_one_episode_and_spares_the_rest(gpmotion.load_figure("lamp"), 0)

@@ -14,6 +14,7 @@ from gpmotion.controllers import schedule
 from gpmotion.figures import SpecError, compile_spec, load_spec, planar_spec_to_3d
 from gpmotion.sim import geometry3d as g3
 from gpmotion.sim import spatial3d as K
+from tests import batch_checks as B
 from tests import figures_for_tests as F
 from tests.reference import spatial3d_ref as ref
 
@@ -500,29 +501,13 @@ def test_kernels_run_without_jit_and_agree(tmp_path):
 
 # ---------------------------------------------------------------- 7. batches
 def test_a_batch_equals_its_episodes_run_alone():
-    fig = gpmotion.load_figure(planar_spec_to_3d(load_spec(LAMP), root="free"))
-    rng = np.random.default_rng(1)
-    off = fig.model.neutral + rng.uniform(-0.3, 0.3, (4, 3))
-    ctrl = schedule.sines(off, 0.4, rng.uniform(3, 12, (4, 3)), 0.0)
-    scene = gpmotion.make_scene()
-    batch = gpmotion.rollout(fig, scene, ctrl, n_steps=1000)
-    for e in range(4):
-        one = schedule.sines(off[e], 0.4, ctrl.cf[e, 6:9], 0.0)
-        single = gpmotion.rollout(fig, scene, one, n_steps=1000)
-        assert np.array_equal(batch.q[e], single.q[0])
-        assert np.array_equal(batch.contact_force[e], single.contact_force[0])
+    B.assert_a_batch_equals_its_episodes_run_alone(
+        gpmotion.load_figure(planar_spec_to_3d(load_spec(LAMP), root="free")), 1000)
 
 
 def test_divergence_flags_one_episode_and_spares_the_rest():
-    fig = gpmotion.load_figure(planar_spec_to_3d(load_spec(LAMP), root="free"))
-    q0 = np.tile(fig.q_default, (3, 1))
-    qd0 = np.zeros((3, fig.nv))
-    q0[1, 0], qd0[1, 3] = 9990.0, 5000.0
-    ctrl = schedule.stack([schedule.constant(fig.model.neutral)] * 3)
-    tr = gpmotion.rollout(fig, gpmotion.make_scene(), ctrl, n_steps=500, q0=q0, qd0=qd0)
-    assert list(tr.diverged) == [False, True, False]
-    assert 0 <= tr.diverged_step[1] < 10
-    assert np.array_equal(tr.q[0], tr.q[2]) and np.all(np.isfinite(tr.q))
+    B.assert_divergence_flags_one_episode_and_spares_the_rest(
+        gpmotion.load_figure(planar_spec_to_3d(load_spec(LAMP), root="free")), 3)
 
 
 # ---------------------------------------------------------------- spec

@@ -3,7 +3,6 @@ hand-edited inputs refused with one line (issue 13)."""
 import errno
 import json
 import os
-import re
 import shutil
 
 import pytest
@@ -12,19 +11,12 @@ from gpmotion import records, rundir
 from gpmotion.cli import main
 from gpmotion.records import FormatError, RunDirError
 from gpmotion.rundir import RunDir, display_path
+from tests.cli_checks import one_line_error, refused, refused_before_the_directory
 
 GP = ["--param", "seconds=0.3", "--population", "8", "--generations", "3", "--quiet",
       "--no-artifacts"]
 SERIAL = ["--controller", "bsr-time", "--param", "seconds=0.3", "--working", "4",
           "--generations", "12", "--quiet", "--no-artifacts"]
-
-
-def one_line_error(capsys, needle):
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("gpmotion: error:") and "\n" not in err, err
-    # test names appear in tmp paths: look for the needle outside them
-    assert needle in re.sub(r"/tmp/pytest-of-[^/]+/pytest-\d+/[^/]+", "<tmp>", err), err
-    return err
 
 
 # ------------------------------------------------------------------ the lock
@@ -184,25 +176,19 @@ def test_checkpoint_of_another_run_is_refused(finished, tmp_path, capsys):
     run = _copy(finished, tmp_path)
     (run / "best.json").unlink()
     shutil.copy(finished / "1" / "checkpoint.json", run / "checkpoint.json")
-    capsys.readouterr()
-    assert main(["resume", str(run), "--quiet"]) == 2
-    one_line_error(capsys, "another run")
+    refused(capsys, ["resume", str(run), "--quiet"], "another run")
 
 
 def test_edited_config_is_refused(finished, tmp_path, capsys):
     run = _copy(finished, tmp_path)
     _edit(run / "config.json", lambda d: d["run"]["search"].update(population=10))
-    capsys.readouterr()
-    assert main(["resume", str(run), "--quiet"]) == 2
-    one_line_error(capsys, "config.json")
+    refused(capsys, ["resume", str(run), "--quiet"], "config.json")
 
 
 def test_checkpoint_search_settings_never_override_config(finished, tmp_path, capsys):
     run = _copy(finished, tmp_path)
     _edit(run / "checkpoint.json", lambda d: d["search"]["config"].update(population=12))
-    capsys.readouterr()
-    assert main(["resume", str(run), "--quiet"]) == 2
-    one_line_error(capsys, "population")
+    refused(capsys, ["resume", str(run), "--quiet"], "population")
 
 
 @pytest.mark.parametrize("value", [-5, 10**400, "7", 2.5, None])
@@ -214,9 +200,7 @@ def test_absurd_evaluations_are_refused_and_the_log_kept(finished, tmp_path, cap
     doc["evaluations"] = value
     raw = json.dumps(doc).replace(str(10**400), "1e400")    # a float literal JSON turns into inf
     (run / "checkpoint.json").write_text(raw)
-    capsys.readouterr()
-    assert main(["resume", str(run), "--quiet"]) == 2
-    one_line_error(capsys, "evaluations")
+    refused(capsys, ["resume", str(run), "--quiet"], "evaluations")
     assert (run / "log.csv").read_text() == log
 
 
@@ -234,29 +218,23 @@ def test_absurd_evaluations_are_refused_and_the_log_kept(finished, tmp_path, cap
 def test_hand_edited_config_gives_one_line(finished, tmp_path, capsys, edit, needle):
     run = _copy(finished, tmp_path)
     _edit(run / "config.json", edit)
-    capsys.readouterr()
-    assert main(["resume", str(run), "--quiet"]) == 2
-    one_line_error(capsys, needle)
+    refused(capsys, ["resume", str(run), "--quiet"], needle)
 
 
 # ------------------------------------------------------------------ bad input first
 
 def test_series_with_a_bad_second_value_writes_nothing(tmp_path, capsys):
     out = tmp_path / "s"
-    assert main(["run", "lamp_hop", "--out", str(out), "--param", "distance=0.3,99",
-                 *GP[2:]]) == 2
-    one_line_error(capsys, "distance")
-    assert not out.exists()
+    refused_before_the_directory(capsys, ["run", "lamp_hop", "--out", str(out), "--param", "distance=0.3,99",
+                                          *GP[2:]], out, "distance")
 
 
 @pytest.mark.parametrize("param, needle", [("w_max_height=1e308", "w_max_height"),
                                            ("seconds=1e-9", "seconds")])
 def test_unbounded_task_parameters_refused(tmp_path, capsys, param, needle):
     out = tmp_path / "o"
-    assert main(["run", "starman_travel", "--controller", "bsr-time", "--param", param,
-                 "--out", str(out)]) == 2
-    one_line_error(capsys, needle)
-    assert not out.exists()
+    refused_before_the_directory(capsys, ["run", "starman_travel", "--controller", "bsr-time",
+                                          "--param", param, "--out", str(out)], out, needle)
 
 
 def test_costs_stay_finite_under_a_huge_weight(tmp_path):
@@ -275,10 +253,8 @@ def test_population_2_runs(tmp_path):
 
 def test_absurd_rule_count_refused_before_the_directory(tmp_path, capsys):
     out = tmp_path / "o"
-    assert main(["run", "starman_travel", "--controller", "bsr-time", "--rules", "10000000",
-                 "--out", str(out)]) == 2
-    one_line_error(capsys, "--rules")
-    assert not out.exists()
+    refused_before_the_directory(capsys, ["run", "starman_travel", "--controller", "bsr-time",
+                                          "--rules", "10000000", "--out", str(out)], out, "--rules")
 
 
 def test_best_json_of_a_diverged_run_says_so(tmp_path, monkeypatch):

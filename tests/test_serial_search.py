@@ -64,15 +64,20 @@ def test_same_seed_identical_other_seed_differs():
     assert a.history != c.history
 
 
+def restored(part, fresh, stop_between_ask_and_tell):
+    """``fresh`` given ``part``'s state through JSON (taken after an ask when asked to)."""
+    if stop_between_ask_and_tell:
+        part.ask()
+    fresh.load_state_dict(json.loads(json.dumps(part.state_dict(), allow_nan=False)))
+    return fresh
+
+
 @pytest.mark.parametrize("stop_between_ask_and_tell", [False, True])
 def test_state_dict_resumes_identically(stop_between_ask_and_tell):
     full = run(make(5))
     part = run(make(5), until=37)
-    if stop_between_ask_and_tell:
-        part.ask()
-    state = json.loads(json.dumps(part.state_dict(), allow_nan=False))
-    resumed = make(999, n_generations=1)     # wrong seed and config: the state wins
-    resumed.load_state_dict(state)
+    resumed = restored(part, make(999, n_generations=1),     # wrong seed and config: the state wins
+                       stop_between_ask_and_tell)
     assert resumed.n_generations == 120
     if stop_between_ask_and_tell:
         assert resumed.pending is not None
@@ -208,12 +213,8 @@ def test_rescore_draws_no_random_numbers_and_keeps_best_when_not_beaten():
 def test_resume_across_a_rescore_is_exact(stop_between_ask_and_tell):
     full = run_phased(make_phased(5))
     part = run_phased(make_phased(5), until=40)
-    if stop_between_ask_and_tell:
-        part.ask()
-        assert part.rescoring
-    state = json.loads(json.dumps(part.state_dict(), allow_nan=False))
-    resumed = make_phased(6)
-    resumed.load_state_dict(state)
+    resumed = restored(part, make_phased(6), stop_between_ask_and_tell)
+    assert part.rescoring or not stop_between_ask_and_tell     # the ask began a re-score
     run_phased(resumed)
     assert resumed.history == full.history
     assert resumed.best_genome.to_dict() == full.best_genome.to_dict()
