@@ -6,12 +6,17 @@ reseeding every 200 rounds) for ``--budget`` evaluations (default 40,000 =
 C × G with G = 4,000), kinematic actuation (the paper's τ-law), then the
 best controller's motion is classified by :mod:`gpmotion.gaits`.  Prints a
 table of gait counts per configuration (and the distance travelled), writes
-one filmstrip per gait found to ``--docs`` and every run's best controller
-and features to ``--out`` (``results.jsonl``: finished runs are skipped when
-the command is repeated, so an interrupted study resumes).
+one filmstrip per gait found to ``--docs``.  Every run is a run folder
+(``OUT/runs/NAME-seedS-BUDGET``, checkpointed every 10 s by the run loop)
+and, once finished, a result file (``OUT/NAME-seedS-BUDGET.json``, with the
+best controller): the same command skips finished runs and resumes cut ones
+where they stopped, so partial progress is never lost.  The table counts,
+per configuration and seed, the run at ``--budget`` or else the largest
+smaller budget finished, and names the budgets it counted.
 
     python benchmarks/auslander_2d.py [--seeds 5] [--budget 40000]
         [--configs star-contact,beryl-tumble] [--workers 2] [--out DIR] [--docs DIR]
+        [--table-only]
 
 Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-sense      Star-Man, sense-based, R = 10, unguided   [shuffle, Figs. 9-10]
@@ -19,7 +24,7 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-contact    + contact_distance                        [shuffle]
   star-rotations  + rotations                               [cartwheel]
   star-height     + max_height                              [hop]
-  beryl-tumble    Beryl, time-based, t_per = T, + rotations              [tumble, Fig. 11]
+  beryl-tumble    Beryl, time-based, t_per = T, + rotations (w 4)        [tumble, Fig. 11]
   beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
@@ -29,6 +34,7 @@ cut short still has the first seeds of every configuration.
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import multiprocessing as mp
 import os
@@ -47,18 +53,21 @@ CONFIGS = {
                    "Star-Man sense-based R=10, unguided"),
     "star-time": ("starman_travel", "bsr-time", {}, {}, (), "Star-Man time-based, unguided"),
     "star-contact": ("starman_travel", "bsr-time", {"w_contact_distance": 2.0}, {},
-                     ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance"),
+                     ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 2)"),
     "star-rotations": ("starman_travel", "bsr-time", {"w_rotations": 0.5}, {}, ("cartwheel",),
-                       "Star-Man time-based + rotations"),
+                       "Star-Man time-based + rotations (w 0.5)"),
     "star-height": ("starman_travel", "bsr-time", {"w_max_height": 2.0}, {}, ("hop",),
-                    "Star-Man time-based + max_height"),
+                    "Star-Man time-based + max_height (w 2)"),
     # Beryl: τ ≥ 0.2 s (bsr_dt 0.1), footnote 2's remedy for excessive torque;
-    # with τ ≥ 0.1 s its kinematic legs hopped 4-6 m in 3 s at weights 0.5 and 2
-    "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 2.0}, {"bsr_dt": 0.1}, ("tumble",),
-                     "Beryl time-based, t_per = T, + rotations"),
+    # with τ ≥ 0.1 s its kinematic legs hopped 4-6 m in 3 s at weights 0.5 and 2.
+    # Rotations weight 4: at 2 a 5.5 m hop that falls 0.88 turns forward beat a
+    # tumble (seed 0, 10,000 evaluations); at 4 the same seed tumbles (1.11 turns)
+    "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 4.0}, {"bsr_dt": 0.1}, ("tumble",),
+                     "Beryl time-based, t_per = T, + rotations (w 4), τ ≥ 0.2 s"),
     "beryl-periodic": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
                        {"t_per": 0.5, "bsr_dt": 0.1},
-                       ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, + contact_distance"),
+                       ("periodic shuffle",),
+                       "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s"),
     # the paper's Beryl configurations name no secondary term; unguided, ours hops
     "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
                               "Beryl time-based, t_per = T, unguided"),
@@ -74,36 +83,47 @@ def _fail(msg: str) -> None:
 
 
 def run_one(name: str, seed: int, budget: int, out: str) -> dict:
-    """One serial search of configuration ``name``; its best motion classified."""
+    """One serial search of configuration ``name``; its best motion classified.
+
+    The search runs through the run loop (``gpmotion.run``) in its own run
+    folder ``OUT/runs/NAME-seedS-BUDGET``, which checkpoints every 10 s: a
+    killed study resumes each unfinished run where it stopped, and the result
+    is the same as an uninterrupted run's (the run loop's guarantee)."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     from gpmotion import gaits
-    from gpmotion.evaluate import InProcessEvaluator
     from gpmotion.families import make_family
     from gpmotion.replay import replay_genome
-    from gpmotion.search.adapters import make_search
+    from gpmotion.run import run
+    from gpmotion.runconfig import RunConfig
     from gpmotion.task import get_task
     task_name, fam_name, params, options, _, _ = CONFIGS[name]
+    cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=dict(params),
+                    family_options=dict(options), threads=1,
+                    search={"n_working": WORKING, "n_generations": budget // WORKING - 1,
+                            "reseed_every": RESEED})
+    run_dir = Path(out) / "runs" / f"{name}-seed{seed}-{budget}"
+    resumed = (run_dir / "config.json").exists()
+    c0 = time.process_time()
+    # on resume the recorded run must be this configuration (else one-line error)
+    genome, _, _ = run(cfg, run_dir, resume=resumed, quiet=True, artifacts=False)
+    cpu = time.process_time() - c0
+    log = list(csv.DictReader(open(run_dir / "log.csv", newline="")))
     task = get_task(task_name, **params)
     fam = make_family(fam_name, task, **options)
-    search = make_search(fam, seed, n_working=WORKING, n_generations=budget // WORKING - 1,
-                         reseed_every=RESEED)
-    ev = InProcessEvaluator(task, fam, threads=1)
-    ev.evaluate([fam.random(np.random.default_rng(seed))])           # compile / load the cache
-    t0, c0 = time.perf_counter(), time.process_time()
-    while not search.done:
-        genomes = search.ask()
-        search.tell(ev.evaluate(genomes, search.progress))
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, search.best)
+    traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, genome)
     gait, f = gaits.gait_of(traj)
-    rec = {"config": name, "seed": seed, "budget": budget, "evaluations": search.search.evaluations,
-           "gait": gait, "cost": float(costs[0]), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+    rec = {"config": name, "seed": seed, "budget": budget, "evaluations": int(log[-1]["evaluations"]),
+           "gait": gait, "cost": float(costs[0]), "wall_s": round(float(log[-1]["elapsed_s"]), 1),
+           # CPU of the invocation that finished the run (all of it unless resumed)
+           "cpu_s": round(cpu, 1), "resumed": resumed,
            **{k: float(v[0]) for k, v in measures.items()},
            "features": {k: v for k, v in f.__dict__.items()},
-           "task": task_name, "params": task.p, "family": fam_name, "options": fam.options,
-           "genome": fam.to_json(search.best)}
+           "task": task_name, "params": task.params, "family": fam_name, "options": fam.options,
+           "genome": fam.to_json(genome)}
     path = Path(out) / f"{name}-seed{seed}-{budget}.json"
-    path.write_text(json.dumps(rec))
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(rec))
+    os.replace(tmp, path)                     # a result file is whole or absent
     return rec
 
 
@@ -111,18 +131,54 @@ def _job(args):
     return run_one(*args)
 
 
-def load_results(out: Path, budget: int) -> dict:
+def current(rec: dict) -> bool:
+    """Was this record run with its configuration as CONFIGS now defines it?"""
+    if rec.get("config") not in CONFIGS:
+        return False
+    task, family, params, options = CONFIGS[rec["config"]][:4]
+    return (rec["task"].split("-v")[0] == task and rec["family"] == family
+            and all(rec["params"].get(k) == v for k, v in params.items())
+            and all(rec["options"].get(k) == v for k, v in options.items()))
+
+
+def load_results(out: Path) -> dict:
+    """Every finished run in ``out`` of a configuration as now defined:
+    {(config, seed, budget): record}; others are named on stderr and skipped."""
     done = {}
-    for p in sorted(out.glob(f"*-{budget}.json")):
+    for p in sorted(out.glob("*-seed*-*.json")):
         rec = json.loads(p.read_text())
-        done[(rec["config"], rec["seed"])] = rec
+        if current(rec):
+            done[(rec["config"], rec["seed"], rec["budget"])] = rec
+        else:
+            print(f"auslander_2d: {p} was run with other settings; skipped", file=sys.stderr)
     return done
 
 
+def pick(results: dict, names, seeds, budget: int) -> dict:
+    """Per (config, seed) the run at ``budget``, else the largest smaller
+    budget finished (a cut-short study still reports every cell, each with
+    the evaluations it had): {(config, seed): record}."""
+    chosen = {}
+    for (n, s, b), rec in results.items():
+        if n in names and s in seeds and b <= budget:
+            if (n, s) not in chosen or b > chosen[(n, s)]["budget"]:
+                chosen[(n, s)] = rec
+    return chosen
+
+
+def _budgets(recs) -> str:
+    count = Counter(r["budget"] for r in recs)
+    if len(count) == 1:
+        return f"{next(iter(count)):,}"
+    return ", ".join(f"{b:,} ×{k}" for b, k in sorted(count.items(), reverse=True))
+
+
 def table(results: dict, names, seeds) -> str:
+    """Gait counts per configuration from ``pick``'s records; the evaluations
+    column says the budget of every run counted."""
     from gpmotion.gaits import GAITS
-    head = ["configuration", "runs", *GAITS, "expected gait is the majority", "distance m (median [min, max])",
-            "wall s (median)"]
+    head = ["configuration", "runs", "evaluations per run", *GAITS, "expected gait is the majority",
+            "distance m (median [min, max])", "wall s (median)"]
     rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name in names:
         recs = [results[(name, s)] for s in seeds if (name, s) in results]
@@ -133,7 +189,7 @@ def table(results: dict, names, seeds) -> str:
         hit = sum(r["gait"] in expected for r in recs)
         d = np.array([r["distance"] for r in recs])
         verdict = f"{hit} / {len(recs)} ({' or '.join(expected)})" if expected else "—"
-        rows.append("| " + " | ".join([CONFIGS[name][5], str(len(recs)),
+        rows.append("| " + " | ".join([CONFIGS[name][5], str(len(recs)), _budgets(recs),
                                        *(str(count.get(g, 0)) for g in GAITS), verdict,
                                        f"{np.median(d):.2f} [{d.min():.2f}, {d.max():.2f}]",
                                        f"{np.median([r['wall_s'] for r in recs]):.0f}"]) + " |")
@@ -159,7 +215,7 @@ def filmstrips(results: dict, docs: Path) -> list[str]:
         task = get_task(rec["task"], **rec["params"])
         fam = make_family(rec["family"], task, **rec["options"])
         traj = replay_genome(task, fam, fam.default_actuation, fam.from_json(rec["genome"]))[0]
-        path = docs / f"auslander_{task.figure}_{gait.replace(' ', '_')}.png"
+        path = docs / f"auslander_{task.figure.name}_{gait.replace(' ', '_')}.png"
         render_any(traj, filmstrip=str(path),
                    title=f"{gait}: {CONFIGS[rec['config']][5]}, seed {rec['seed']} "
                          f"({rec['distance']:.2f} m)")
@@ -178,6 +234,8 @@ def main(argv=None):
     ap.add_argument("--out", default="runs/auslander_2d")
     ap.add_argument("--docs", default=None, help="write gait filmstrips here (e.g. docs)")
     ap.add_argument("--json", action="store_true", help="print the results as JSON lines too")
+    ap.add_argument("--table-only", action="store_true",
+                    help="run nothing: the table from the finished runs in --out")
     args = ap.parse_args(argv)
     names = [n.strip() for n in args.configs.split(",") if n.strip()]
     unknown = [n for n in names if n not in CONFIGS]
@@ -188,24 +246,40 @@ def main(argv=None):
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    results = load_results(out, args.budget)
-    todo = [(n, s, args.budget, str(out)) for s in seeds for n in names if (n, s) not in results]
-    if todo:
-        with mp.get_context("spawn").Pool(min(args.workers, len(todo))) as pool:
-            for rec in pool.imap_unordered(_job, todo):
-                results[(rec["config"], rec["seed"])] = rec
-                print(f"{rec['config']} seed {rec['seed']}: {rec['gait']} {rec['distance']:.2f} m "
-                      f"({rec['wall_s']:.0f} s)", flush=True)
-    print(f"\n{args.budget:,} evaluations per run, seeds {seeds[0]}..{seeds[-1]}\n")
-    print(table(results, names, seeds))
+    results = load_results(out)
+    todo = [] if args.table_only else [(n, s, args.budget, str(out)) for s in seeds for n in names
+                                       if (n, s, args.budget) not in results]
+    try:
+        for rec in _runs(todo, args.workers):
+            results[(rec["config"], rec["seed"], rec["budget"])] = rec
+            print(f"{rec['config']} seed {rec['seed']}: {rec['gait']} {rec['distance']:.2f} m "
+                  f"({rec['wall_s']:.0f} s)", flush=True)
+    except KeyboardInterrupt:          # the run loop checkpointed (Ctrl-C / SIGTERM)
+        print("auslander_2d: stopped; the same command resumes", file=sys.stderr)
+        sys.exit(130)
+    except ValueError as e:            # e.g. a run folder recorded with other settings
+        _fail(f"{e} (use another --out for changed settings)")
+    chosen = pick(results, names, seeds, args.budget)
+    print(f"\nup to {args.budget:,} evaluations per run, seeds {seeds[0]}..{seeds[-1]}\n")
+    print(table(chosen, names, seeds))
     if args.json:
-        for (n, s), rec in sorted(results.items()):
-            if n in names and s in seeds:
-                print(json.dumps({k: v for k, v in rec.items() if k != "genome"}))
+        for _, rec in sorted(chosen.items()):
+            print(json.dumps({k: v for k, v in rec.items() if k != "genome"}))
     if args.docs:
-        for p in filmstrips({k: v for k, v in results.items() if k[0] in names and k[1] in seeds},
-                            Path(args.docs)):
+        for p in filmstrips(chosen, Path(args.docs)):
             print("wrote", p)
+
+
+def _runs(todo, workers: int):
+    """Finished records, in-process for one worker (Ctrl-C / SIGTERM then
+    checkpoints the run), else from a pool of spawned processes."""
+    if workers == 1 or len(todo) <= 1:
+        for job in todo:
+            yield run_one(*job)
+        return
+    if todo:
+        with mp.get_context("spawn").Pool(min(workers, len(todo))) as pool:
+            yield from pool.imap_unordered(_job, todo)
 
 
 if __name__ == "__main__":

@@ -337,7 +337,7 @@ def compare_lamp_gp(episodes, repeats, threads, py_episodes, seed=0, seconds=Non
     from gpmotion.gp.pset import compile_reference
 
     task, fam, tokens = bench_gp_trees(seed)
-    fig, scene = task.fig, task.scene()
+    fig, scene = task.figure, task.scene()
     dt = task.dt
     n_steps = int(round((seconds or task.seconds) / dt))
     q0, qd0 = task.initial_state()
@@ -584,14 +584,15 @@ def _fallback_humanoid():
 FALLBACK_HUMANOID = _fallback_humanoid()
 
 
-def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25):
-    """Ours vs MuJoCo's C ``rollout`` on the 3-D humanoid (herman), sine targets on
-    every actuator changing every step (amplitude ``amplitude`` × the sine
+def compare_humanoid(episodes, seconds, repeats, threads, seed=0, amplitude=0.25, figure=None):
+    """Ours vs MuJoCo's C ``rollout`` on the 3-D humanoid (herman; or ``figure``,
+    a registered 3-D figure such as the creatures), sine targets on every
+    actuator changing every step (amplitude ``amplitude`` × the sine
     workload's), one thread and all threads."""
     import mujoco as mj
     from mujoco import rollout as mjr
 
-    fig = humanoid_figure()
+    fig = gpmotion.load_figure(figure) if figure else humanoid_figure()
     scene = gpmotion.make_scene()
     dt = 1e-3
     n_steps = int(round(seconds / dt))
@@ -736,6 +737,12 @@ def format_summary(r: dict) -> str:
                   f"  ratio   {h['ratio_one_thread']:8.2f}× one thread (bar {h['bar_one_thread']:g}×: "
                   f"{'met' if h['meets_bar'] else 'NOT met'}; goal 1×: "
                   f"{'met' if h['meets_goal'] else 'not met'}), {h['ratio_all_threads']:.2f}× all threads"]
+    for name, h in r.get("creatures", {}).items():     # issue 17's bar: ≥ 1.5× one thread
+        w = h["workload"]
+        lines.append(f"creature {name} ({w['links']} links, {w['dofs']} dof, {w['contacts']} contacts): "
+                     f"ours {h['ours_steps_per_s'] / 1e6:.3f}, MuJoCo {h['mujoco_steps_per_s'] / 1e6:.3f} "
+                     f"M steps/s one thread, ratio {h['ratio_one_thread']:.2f}× "
+                     f"(bar 1.5×: {'met' if h['ratio_one_thread'] >= 1.5 else 'NOT met'})")
     if "pendulum3d_crosscheck" in r:
         c = r["pendulum3d_crosscheck"]
         lines.append(f"3-D pendulum cross-check (tilted second axis): max |Δθ| vs MuJoCo Euler "
@@ -754,7 +761,7 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--json", action="store_true", help="print one JSON object with every number")
-    p.add_argument("--only", choices=["sine", "gp", "humanoid"],
+    p.add_argument("--only", choices=["sine", "gp", "humanoid", "creatures"],
                    help="run one workload (default: all)")
     p.add_argument("--humanoid-seconds", type=float, default=None,
                    help="simulated seconds per episode, humanoid workload (default 2, quick 0.5)")
@@ -783,6 +790,9 @@ def main(argv=None):
                                        seconds=a.gp_seconds)
     if a.only in (None, "humanoid"):
         result["humanoid"] = compare_humanoid(episodes, a.humanoid_seconds or seconds, repeats, threads)
+    if a.only in (None, "creatures"):        # issue 17: Cujo, Rex, Bob (free roots, on the ground)
+        result["creatures"] = {n: compare_humanoid(episodes, a.humanoid_seconds or seconds, repeats,
+                                                   threads, figure=n) for n in ("cujo", "rex", "bob")}
     result["pendulum_crosscheck"] = pendulum_crosscheck()
     result["pendulum3d_crosscheck"] = pendulum3d_crosscheck()
     result["versions"] = {"mujoco": mujoco.__version__, "numba": numba.__version__,

@@ -1,8 +1,10 @@
 """A new task in one small file: the lamp stretches its head as high as it can.
 
-Drop a file like the class below into a folder and pass `--plugins FOLDER`
-to any gpmotion command; `gpmotion.check_task` runs the same contract checks
-the built-in tasks pass.
+Drop a file like the class below into a folder, name it in the folder's
+manifest ``gpmotion-plugin.toml`` (``modules = ["custom_task"]``) and pass
+`--plugins FOLDER` to any gpmotion command; `gpmotion.check_task` runs the
+same contract checks the built-in tasks pass.  Its id is ``lamp_reach-v1``
+(``version = 2`` publishes a changed score under a new id).
 """
 import numpy as np
 

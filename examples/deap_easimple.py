@@ -36,7 +36,7 @@ best = hall[0]
 full = evaluate_population(toolbox, [best], progress=1.0, assign=False)
 print(f"best cost {best.fitness.values[0]:.4f} when found, "
       f"{full.costs[0]:.4f} with every style term on")
-for joint, tree in zip(task.fig.actuator_names, best):
+for joint, tree in zip(task.figure.actuator_names, best):
     print(f"  {joint}: {tree}")
 save_controller("runs/deap_easimple_best.json", task, best, family=toolbox.family)
 print("saved runs/deap_easimple_best.json: gpmotion replay runs/deap_easimple_best.json")

@@ -24,14 +24,14 @@ def _mount_plugin_packages():
 
 
 _mount_plugin_packages()
-__version__ = "0.1.0"          # before the imports below: run.py records it
+from .version import __version__
 
 from .check import check_primitive, check_task
 from .evaluate import Evaluation
 from .evaluators import make_evaluator
 from .families import make_family
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
-from .gp.primitives import primitive
+from .gp.primitives import STANDARD as STANDARD_PRIMITIVES, primitive
 from .gp.toolbox import evaluate_population, make_toolbox
 from .model import Figure, Model, Scene, make_scene
 from .plugins import load_folder as load_plugins
@@ -40,11 +40,11 @@ from .replay import load_controller, replay_genome
 from .controller_file import save_controller
 from .run import RunConfig, run     # the function: `gpmotion.run(cfg)`; the module is gpmotion.run's home
 from .sim.rollout import Trajectory, rollout, simulate
-from .task import Ease, Task, Term, get_task, register_task, task_names
+from .task import Ease, Task, Term, get_task, register_task, task_ids, task_names
 from . import compose  # composite motions: script language, composites, transition search, robust starts
 
 __all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task",
-           "task_names", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
+           "task_names", "task_ids", "STANDARD_PRIMITIVES", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
            "figure_names", "load_figure", "make_scene", "register_figure", "rollout", "simulate",
            "primitive", "load_plugins", "RunConfig", "run", "load_controller", "replay_genome",
            "save_controller", "read_json", "make_family", "make_evaluator", "Evaluation",

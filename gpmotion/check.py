@@ -120,11 +120,14 @@ def check_primitive(name_or_prim, *, plugins=None, n_random: int = 300, seed: in
 def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | None = 0.5) -> None:
     """Run the public task contract on a task name, class or instance.
 
-    Builds the task (short episodes by default, to keep it quick), checks its
-    terminals are senses of its figure, rolls out random GP controllers and the
-    neutral pose, and checks every term is a finite number per episode, the
-    total is finite, success is a bool per episode, and two evaluations of the
-    same genomes agree exactly.  Raises AssertionError naming the problem.
+    Builds the task (short episodes by default, to keep it quick) and a GP
+    family on it (so its terminals must be senses of its figure and its
+    primitive set registered), rolls out random GP controllers, and checks
+    every term is a finite number per episode, the total is finite, success is
+    a bool per episode, two evaluations of the same genomes agree exactly, the
+    phase factors lie in [0, 1], a scene exists at every progress and the
+    curriculum ends at the task's parameters.  Raises AssertionError naming
+    the problem.
     """
     import random
 
@@ -179,7 +182,7 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
             t.scene_at(progress)
         except Exception as e:  # noqa: BLE001
             raise AssertionError(f"task {name}: no scene at progress {progress}: {e}") from e
-    if t.params_at(1.0) != t.p:
+    if t.params_at(1.0) != t.params:
         raise AssertionError(f"task {name}: the curriculum does not end at the task's parameters")
     if t.curriculum:
         c = ev.evaluate(genomes[:1], 0.0)

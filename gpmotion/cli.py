@@ -76,6 +76,8 @@ def _add_run_args(p):
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
     add_arguments(p)
+    from .compose.robust import add_run_arguments        # --robust-starts K, --perturb ...
+    add_run_arguments(p)
 
 
 def _add_plugins_arg(p):
@@ -105,7 +107,7 @@ def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    from . import __version__
+    from .version import __version__
     ap.add_argument("--version", action="version", version=f"gpmotion {__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     p = sub.add_parser("help", help="help on a command: gpmotion help run")
@@ -227,15 +229,16 @@ def cmd_list(args):
     from . import figure_names
     from .families import FAMILIES
     from .gp import primitives
-    from .task import get_task, task_names
+    from .task import task_class, task_ids
     _activate_plugins(args)
     primitives.load_builtin()
     if args.what in ("all", "tasks"):
         print("tasks:")
-        for n in task_names():
-            t = get_task(n)
-            print(f"  {n:<18} {t.figure:<9} {t.description}")
-        print("  (parameters, cost terms, joints and senses of one task: gpmotion show TASK)")
+        for tid in task_ids():
+            t = task_class(tid)
+            print(f"  {tid:<24} {t.figure:<16} {t.description}")
+        print("  (a bare name means its newest version; parameters, cost terms, joints and senses "
+              "of one task: gpmotion show TASK)")
     if args.what in ("all", "figures"):
         print("figures:", ", ".join(figure_names()))
     if args.what in ("all", "primitives"):
@@ -267,6 +270,8 @@ def _run_configs(args):
     validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
     search, fam = collect(args, args.controller)
+    from .compose.robust import run_setting
+    robust = run_setting(args)
     if args.preset:
         from .gp.presets import apply_preset
         fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
@@ -284,7 +289,7 @@ def _run_configs(args):
                             family_options=dict(fam), search=dict(search),
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
-                            plugins=list(plugins)), name
+                            plugins=list(plugins), robust=dict(robust)), name
 
 
 def _figure_variant(task_name, path):
@@ -380,6 +385,9 @@ def cmd_replay(args):
     from .replay import load_controller, replay_genome
     from .run import render_trajectory
     _activate_plugins(args)
+    from .compose import playback                       # a composite file: its phases in series
+    if playback.is_composite(args.source):
+        return playback.replay(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -424,6 +432,9 @@ def cmd_render(args):
         raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
                          "(the task's 'seconds' parameter)")
     _activate_plugins(args)
+    from .compose import playback
+    if args.source and playback.is_composite(args.source):
+        return playback.render_command(args)
     if args.figure:
         from . import load_figure, simulate
         from .records import validate_number
@@ -478,6 +489,9 @@ def cmd_export(args):
     from .replay import load_controller, replay_genome
     validate_number("--scale", args.scale, lo=1e-6, hi=1e6)
     _activate_plugins(args)
+    from .compose import playback
+    if playback.is_composite(args.source):
+        return playback.export_command(args)
     task, family, actuation, genome, rec = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
@@ -490,13 +504,13 @@ def cmd_export(args):
 def cmd_check(args):
     from .check import check_primitive, check_task
     from .gp import primitives
-    from .task import task_names
+    from .task import task_ids
     if args.only_plugins and not args.plugins:
         raise ValueError("--only-plugins needs --plugins DIR")
     primitives.load_builtin()
-    prims_before, tasks_before = set(primitives.names()), set(task_names())
+    prims_before, tasks_before = set(primitives.names()), set(task_ids())
     _activate_plugins(args)
-    prims, tasks = primitives.names(), task_names()
+    prims, tasks = primitives.names(), task_ids()       # every version of every task
     if args.only_plugins:
         prims = [n for n in prims if n not in prims_before]
         tasks = [n for n in tasks if n not in tasks_before]

@@ -106,8 +106,8 @@ OPTIONS: list[Option] = [
     Option("--max-size", "search", {GP: "max_size"}, "GP nodes per tree cap (default 200)",
            "the GP tree-size cap", dict(type=int), _number(1, 512, True)),
     Option("--primitives", "family", {GP: "primitives"},
-           "GP function set, a comma list (default: every registered primitive; "
-           "gpmotion list primitives)", "the GP function set",
+           "GP function set, a comma list (default: the task's own set, shown by "
+           "gpmotion show TASK; names: gpmotion list primitives)", "the GP function set",
            dict(type=str, metavar="NAME,..."), _primitives),
     Option("--erc-range", "family", {GP: "erc_range"},
            "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",

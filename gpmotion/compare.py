@@ -35,7 +35,7 @@ from .plugins import loaded as loaded_plugins
 from .records import atomic_write_json, atomic_write_text, envelope
 from .replay import replay_genome
 from .search.adapters import make_search, serial_generations
-from .task import get_task
+from .task import get_task, task_id
 
 
 def _search_opts(family: str, budget: int, population: int, task=None):
@@ -75,7 +75,7 @@ def run_one(task, family_name, seed, budget, actuation, population, workers=0, s
     wall = time.perf_counter() - t0
     traj, costs, measures, ok = replay_genome(task, fam, actuation, search.best)
     controller = envelope("best", {
-        "task": task.name, "params": dict(task.p), "family": fam.name,
+        "task": task.id, "params": dict(task.params), "family": fam.name,
         "options": dict(fam.options), "actuation": actuation, "plugins": loaded_plugins(),
         "genome": fam.to_json(search.best), "cost": float(costs[0]), "seed": seed,
         "terms": task.breakdown(measures, 0, 1.0), "final_cost": float(costs[0]),
@@ -251,7 +251,7 @@ def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", param
     md = (f"{task.name}, actuation {actuation}, {budget:,} evaluations per run, {seeds} seeds; "
           f"cost re-scored at full style weight (lower is better)\n\n" + table_markdown(rows))
     atomic_write_text(out / "compare.md", md)
-    atomic_write_json(out / "runs.json", {"task": task.name, "params": task.p, "actuation": actuation,
+    atomic_write_json(out / "runs.json", {"task": task.id, "params": task.params, "actuation": actuation,
                                           "budget": budget, "runs": runs})
     write_curves(out, task, runs, budget, actuation)
     return rows, md
@@ -270,6 +270,6 @@ def replot(out) -> Path:
     """Redraw a compare folder's curves from its runs.json (no search is run)."""
     import json
     d = json.loads((Path(out) / "runs.json").read_text())
-    task = get_task(d["task"], **d["params"])
+    task = get_task(task_id(d["task"], recorded=True), **d["params"])    # bare: before ids, v1
     write_curves(out, task, d["runs"], int(d["budget"]), d["actuation"])
     return Path(out) / "curves.png"

@@ -26,12 +26,12 @@ def save_controller(path: str | Path, task: Task | str, genome, *, family: Famil
     from .run import RunConfig, controller_record
     task = get_task(task) if isinstance(task, str) else task
     fam = family if isinstance(family, Family) else make_family(family, task)
-    if fam.task.name != task.name:
-        raise ValueError(f"family was made for task {fam.task.name}, not {task.name}")
+    if fam.task.id != task.id:
+        raise ValueError(f"family was made for task {fam.task.id}, not {task.id}")
     genome = fam.from_json(fam.to_json(genome))      # the checks a file read gets
     actuation = actuation or fam.default_actuation
     traj, costs, measures, ok = replay_genome(task, fam, actuation, genome)
-    cfg = RunConfig(task=task.name, family=fam.name, seed=int(seed),
+    cfg = RunConfig(task=task.id, family=fam.name, seed=int(seed),
                     plugins=[str(Path(d).resolve()) for d in plugins])
     rec = controller_record(cfg, task, fam, actuation, genome, costs[0])
     rec.update(terms=task.breakdown(measures, 0, 1.0), final_cost=float(costs[0]),

@@ -41,6 +41,7 @@ class InProcessEvaluator:
     family: Family
     actuation: str | None = None
     threads: int | None = None
+    robust: dict | None = None           # perturbed starts (gpmotion.compose.robust), + the run's seed
     evaluations: int = field(default=0, init=False)
 
     def __post_init__(self):
@@ -56,17 +57,22 @@ class InProcessEvaluator:
 
     def rollout(self, genomes, record_senses=False, progress: float = 1.0):
         batch = self.family.encode(genomes)
-        return rollout(self.task.fig, self.scene(progress), batch, n_steps=self.task.n_steps,
+        return rollout(self.task.figure, self.scene(progress), batch, n_steps=self.task.n_steps,
                        q0=self._q0, qd0=self._qd0, dt=self.task.dt,
                        record_every=self.task.record_every, actuation=self.actuation,
                        default_tau=self.family.default_tau,
                        record_senses=record_senses or self.family.needs_senses,
                        threads=self.threads)
 
-    def evaluate(self, genomes, progress: float = 1.0) -> Evaluation:
+    def evaluate(self, genomes, progress: float = 1.0, generation: int = 0) -> Evaluation:
+        """``generation`` picks the perturbed starts of a robust evaluation (else unused)."""
         genomes = list(genomes)
         if not genomes:
             return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
+        if self.robust:
+            from .compose.robust import batch_evaluation
+            self.evaluations += len(genomes)
+            return batch_evaluation(self, genomes, progress, generation)
         traj = self.rollout(genomes, progress=progress)
         costs, measures, ok = self.task.score(traj, progress)
         extras = None
@@ -99,17 +105,17 @@ def code_digest() -> str:
 _CODE = None
 
 
-def spec_of(task: Task, family: Family, actuation: str, plugins=()) -> dict:
+def spec_of(task: Task, family: Family, actuation: str, plugins=(), robust=None) -> dict:
     """Plain-data description a remote worker rebuilds the evaluator from.
 
     ``plugins``: requirement records (:mod:`gpmotion.plugins`: name and digest),
     never folder paths.
     """
     from .plugins import for_record
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation,
             "plugins": [{k: v for k, v in r.items() if k != "path"} for r in for_record(plugins)],
-            "code": code_digest()}
+            "code": code_digest(), **({"robust": dict(robust)} if robust else {})}
 
 
 _WORKER_CACHE: dict[str, InProcessEvaluator] = {}
@@ -132,12 +138,14 @@ def evaluator_from_spec(spec: dict, threads: int | None = None) -> InProcessEval
         plugins.require(spec.get("plugins", []), "this worker")
         task = get_task(spec["task"], **spec["params"])
         fam = make_family(spec["family"], task, **spec["options"])
-        ev = _WORKER_CACHE[key] = InProcessEvaluator(task, fam, spec["actuation"], threads)
+        ev = _WORKER_CACHE[key] = InProcessEvaluator(task, fam, spec["actuation"], threads,
+                                                     spec.get("robust"))
     return ev
 
 
-def evaluate_chunk(spec: dict, genomes_json: list, progress: float, threads: int | None = 1) -> Evaluation:
+def evaluate_chunk(spec: dict, genomes_json: list, progress: float, threads: int | None = 1,
+                   generation: int = 0) -> Evaluation:
     """Evaluate a chunk of JSON genomes in this (worker) process."""
     ev = evaluator_from_spec(spec, threads)
     genomes = [ev.family.from_json(g) for g in genomes_json]
-    return ev.evaluate(genomes, progress)
+    return ev.evaluate(genomes, progress, generation)

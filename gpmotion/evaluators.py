@@ -208,11 +208,11 @@ def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool 
     evaluator_from_spec(spec, threads=1)
 
 
-def _run_chunk(spec: dict, genomes_json: list, progress: float):
+def _run_chunk(spec: dict, genomes_json: list, progress: float, generation: int = 0):
     """Evaluate one chunk in a worker; returns (Evaluation, seconds of work)."""
     with _CHUNK_LOCK:          # numba's threading layers are not re-entrant across threads
         t0 = time.perf_counter()
-        result = evaluate_chunk(spec, genomes_json, progress, threads=1)
+        result = evaluate_chunk(spec, genomes_json, progress, threads=1, generation=generation)
         return result, time.perf_counter() - t0
 
 
@@ -235,7 +235,8 @@ class _ChunkedEvaluator:
 
     target_task_seconds = TARGET_TASK_SECONDS     # least work per task for this backend's overhead
 
-    def __init__(self, task, family, workers, actuation, chunk_size, plugins, max_retries):
+    def __init__(self, task, family, workers, actuation, chunk_size, plugins, max_retries,
+                 robust=None):
         from .plugins import loaded, require, sources_of
         plugins = loaded() if plugins is None else plugins     # default: all the user loaded
         self.task = task
@@ -247,7 +248,7 @@ class _ChunkedEvaluator:
         if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
             raise ValueError(f"max_retries must be an integer >= 0, got {max_retries!r}")
         self.max_retries = max_retries
-        self.spec = spec_of(task, family, self.actuation, self.plugins)
+        self.spec = spec_of(task, family, self.actuation, self.plugins, robust)
         self.spec["plugin_sources"] = sources_of(self.plugins)     # workers need no shared disk
         self.evaluations = 0
         self.restarts = 0                     # worker losses recovered from
@@ -267,13 +268,14 @@ class _ChunkedEvaluator:
         if rates:
             self.seconds_per_evaluation = statistics.median(rates)
 
-    def evaluate(self, genomes, progress: float = 1.0) -> Evaluation:
+    def evaluate(self, genomes, progress: float = 1.0, generation: int = 0) -> Evaluation:
         genomes = list(genomes)
         if not genomes:
             return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
         payload = [self.family.to_json(g) for g in genomes]
         bounds = self._plan(len(payload))
         chunks = [payload[a:b] for a, b in bounds]
+        self._generation = int(generation)       # the chunks' perturbed starts (robust runs)
         parts = self._run(chunks, float(progress))
         self._learn([(sec, len(c)) for (_, sec), c in zip(parts, chunks)])
         result = Evaluation.concat([p for p, _ in parts])
@@ -281,6 +283,11 @@ class _ChunkedEvaluator:
             raise RuntimeError(f"evaluator returned {len(result.costs)} scores for {len(genomes)} genomes")
         self.evaluations += len(genomes)
         return result
+
+    def _chunk_args(self, chunk, progress) -> tuple:
+        """_run_chunk's arguments; a robust run's chunks also need the generation (its starts)."""
+        robust = "robust" in self.spec
+        return (self.spec, chunk, progress) + ((self._generation,) if robust else ())
 
     def _run(self, chunks, progress):
         raise NotImplementedError
@@ -303,10 +310,10 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
     """
 
     def __init__(self, task, family, workers: int, actuation=None, chunk_size=None, plugins=None,
-                 max_retries: int = 3, quiet: bool = False):
+                 max_retries: int = 3, quiet: bool = False, robust=None):
         requested = _check_workers(workers)
         super().__init__(task, family, usable_workers(requested), actuation, chunk_size, plugins,
-                         max_retries)
+                         max_retries, robust)
         self.requested_workers = requested
         self.quiet = quiet
         if self.workers < requested and not quiet:
@@ -339,7 +346,8 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
             futures = {}
             try:
                 for i in todo:
-                    futures[self._executor.submit(self._chunk_function, self.spec, chunks[i], progress)] = i
+                    futures[self._executor.submit(self._chunk_function,
+                                                  *self._chunk_args(chunks[i], progress))] = i
             except BrokenProcessPool:
                 pass                                   # handled below like a loss during the run
             if self._hook_after_submit is not None:
@@ -474,7 +482,7 @@ class DaskEvaluator(_ChunkedEvaluator):
                  chunk_size=None, plugins=None, max_retries: int = 3,
                  timeout: float = CONNECT_TIMEOUT, reconnect_grace: float | None = None,
                  tls_ca_file=None, tls_cert=None, tls_key=None, quiet: bool = False,
-                 local_tls: bool = True):
+                 local_tls: bool = True, robust=None):
         scheduler = check_scheduler(scheduler)
         workers = _check_workers(workers)
         if scheduler == "local":
@@ -483,7 +491,7 @@ class DaskEvaluator(_ChunkedEvaluator):
                 _say(f"--workers {workers}: using {capped}, the CPUs this process may use "
                      "(each worker runs one thread)")
             workers = capped
-        super().__init__(task, family, workers, actuation, chunk_size, plugins, max_retries)
+        super().__init__(task, family, workers, actuation, chunk_size, plugins, max_retries, robust)
         distributed = _import_distributed()
         import logging      # our one line (SchedulerLost) replaces the client's reconnect errors
         logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
@@ -568,7 +576,7 @@ class DaskEvaluator(_ChunkedEvaluator):
 
     def _submit(self, i, attempt, chunk, progress):
         key = f"gpmotion-eval-{self._token}-{self._batch}-{i}-{attempt}"
-        return self._client.submit(_run_chunk, self.spec, chunk, progress, key=key, pure=False)
+        return self._client.submit(_run_chunk, *self._chunk_args(chunk, progress), key=key, pure=False)
 
     def _collect(self, futures, results, attempts) -> bool:
         """Wait for some futures; store results, resubmit killed ones.  True if the scheduler was lost."""
@@ -690,7 +698,8 @@ def _connection_errors():
 # ---- choice ------------------------------------------------------------------------
 
 def make_evaluator(task, family, *, workers: int = 0, scheduler: str | None = None, actuation=None,
-                   threads: int | None = None, plugins=None, chunk_size=None, **dask_options):
+                   threads: int | None = None, plugins=None, chunk_size=None, robust=None,
+                   **dask_options):
     """The evaluator for ``--workers`` / ``--scheduler``.
 
     ``scheduler`` given → :class:`DaskEvaluator` (``workers`` = local cluster
@@ -698,7 +707,8 @@ def make_evaluator(task, family, *, workers: int = 0, scheduler: str | None = No
     ``tls_key``, ``reconnect_grace``, ``timeout``); else ``workers > 1`` →
     :class:`ProcessPoolEvaluator`; else the in-process evaluator (numba
     threads; ``threads`` caps them).  ``plugins``: requirement records
-    (default: every plugin loaded in this process).
+    (default: every plugin loaded in this process).  ``robust``: a run's
+    perturbed-start setting plus its ``seed`` (gpmotion.compose.robust).
     """
     workers = _check_workers(workers, minimum=0)
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
@@ -706,10 +716,10 @@ def make_evaluator(task, family, *, workers: int = 0, scheduler: str | None = No
     if scheduler is not None:
         return DaskEvaluator(task, family, scheduler=scheduler, workers=workers or 2,
                              actuation=actuation, chunk_size=chunk_size, plugins=plugins,
-                             **dask_options)
+                             robust=robust, **dask_options)
     if any(dask_options.get(k) for k in ("tls_ca_file", "tls_cert", "tls_key")):
         raise ValueError("--tls-* options need a tls:// --scheduler")
     if workers > 1:
         return ProcessPoolEvaluator(task, family, workers, actuation=actuation, chunk_size=chunk_size,
-                                    plugins=plugins)
-    return InProcessEvaluator(task, family, actuation, threads)
+                                    plugins=plugins, robust=robust)
+    return InProcessEvaluator(task, family, actuation, threads, robust)

@@ -71,13 +71,13 @@ class GPFamily(Family):
         goals = task_subgoals(task) if subgoals else ()
         if subgoals:
             self.options["subgoals"] = True
-        self.subgoal_table = subgoal_table(goals, task.fig.sense_names)
+        self.subgoal_table = subgoal_table(goals, task.figure.sense_names)
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         _check_erc_range(self.options["erc_range"])
         self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
-                               primitives,
-                               sense_names=task.fig.sense_names, erc_range=tuple(erc_range),
+                               primitives or task.primitives,     # the task names its set
+                               sense_names=task.figure.sense_names, erc_range=tuple(erc_range),
                                flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
 
@@ -99,7 +99,7 @@ class GPFamily(Family):
             raise ValueError("not a GP controller (expected kind 'gp' with a list of trees)")
         trees = data["trees"]
         if len(trees) != len(self.actuators):
-            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure} has "
+            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure.name} has "
                              f"{len(self.actuators)} actuated joints")
         for t in trees:                       # validate: whitelist, size and depth caps
             bytecode.tokens_to_tree(t, self.info)
@@ -123,9 +123,9 @@ class BSRFamily(Family):
             # a tick of 1e-9 s lets unlimited-torque joints fling a figure metres (not travel)
             raise ValueError(f"bsr_dt (the BSR controller tick) must be within 0.001..1 s, got {bsr_dt!r}")
         self.actuators = task.controlled_actuators()
-        self.limits = task.fig.actuator_limits()[self.actuators]
+        self.limits = task.figure.actuator_limits()[self.actuators]
         if not np.all(np.isfinite(self.limits)):
-            raise ValueError(f"BSR needs finite joint limits on every driven actuator of {task.figure}")
+            raise ValueError(f"BSR needs finite joint limits on every driven actuator of {task.figure.name}")
         self.bsr_dt = min(float(bsr_dt), task.seconds / 8)   # short episodes keep a τ range
 
     def encode(self, genomes):
@@ -154,14 +154,17 @@ class BSRSenseFamily(BSRFamily):
 
     def __init__(self, task, rules=None, **options):
         super().__init__(task, rules=rules or 8, **options)
-        self.sense_indices = bsr_genome.table1_sense_indices(task.fig.sense_names)
+        self.sense_indices = bsr_genome.table1_sense_indices(task.figure.sense_names)
+        if task.figure.dimensions == 3:  # §4.2's filtered figure-centric senses, contain
+            from .bsr.family3d import use_3d_senses
+            use_3d_senses(self)
 
     def random(self, rng):
         return bsr_genome.random_sense_genome(rng, self.options["rules"], len(self.sense_indices),
                                               self.limits, self.bsr_dt, self.task.seconds)
 
     def normalized(self, senses):
-        m = self.task.fig.model
+        m = self.task.figure.model
         return bsr_mutation.normalized_sense_trajectory(senses, m.sense_lo, m.sense_hi,
                                                         self.sense_indices)
 

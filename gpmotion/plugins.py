@@ -1,21 +1,38 @@
 """Plugins: code gpmotion runs besides its own (primitives, tasks, TOML figures).
 
+One loader for the three kinds: a primitive or a task registers itself when
+its module is imported (``@primitive``, ``@register_task``); a figure is a
+TOML spec registered under its file name.
+
 The rule: **a data file never runs code.**  Code runs only from
 
 * folders the user names on the command line (``--plugins DIR``) or passes to
-  :func:`load_folder` from Python, and
+  :func:`load_folder` from Python -- and of such a folder only the modules its
+  manifest names (below), and
 * installed entry points of the ``gpmotion.plugins`` group (as Gymnasium's
   ``load_plugin_envs``): a package declares
   ``[project.entry-points."gpmotion.plugins"] mine = "mypkg.gpm"`` and the
-  module (or the callable it names) is imported by :func:`load_entry_points`.
+  module (or the callable it names) is imported (called) once per process by
+  :func:`load_entry_points`, before any registry lookup.
+
+A plugin folder's manifest, ``gpmotion-plugin.toml``, names what the loader
+reads, in order; nothing else in the folder runs or registers::
+
+    modules = ["hypot", "lamp_stand_tall"]   # ./hypot.py, ./lamp_stand_tall.py
+    figures = ["stiff_lamp"]                 # ./stiff_lamp.toml -> figure "stiff_lamp"
+
+A folder without a manifest is read by the old rule (every ``*.py`` and
+``*.toml`` whose name does not start with ``_``) with a warning; that rule
+goes in the next release.
 
 A run and its controller record the plugins they were made with as
-*requirements* -- ``{"name", "digest", "path"}`` (the path is relative to the
-run directory and for information only).  A command that reads a run
-(``resume``, ``replay``, ``render``, ``export``) checks them with
-:func:`require` against what the user loaded and refuses with one line naming
-what is missing or different.  Nothing read from a file is ever imported or
-resolved against the current directory.
+*requirements* -- ``{"name", "digest", "path"}`` (the digest covers the
+manifest and the files it names; the path is relative to the run directory
+and for information only).  A command that reads a run (``resume``,
+``replay``, ``render``, ``export``) checks them with :func:`require` against
+what the user loaded and refuses with one line naming what is missing or
+different.  Nothing read from a run's files is ever imported or resolved
+against the current directory.
 
 Process-pool and Dask workers get the plugin *sources* from the main process
 (:func:`sources_of`), write them to a cache folder named by their digest,
@@ -26,15 +43,27 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.util
 import os
 import pkgutil
 import re
+import sys
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10
+    import tomli as tomllib
+
 GROUP = "gpmotion.plugins"
+MANIFEST = "gpmotion-plugin.toml"
 SUFFIXES = (".py", ".toml")
 MAX_PLUGINS = 64
+MAX_FILES = 256                 # modules + figures one manifest may name
 _HEX = re.compile(r"^[0-9a-f]{64}$")
+_FILE_STEM = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,99}$")
 
 
 class PluginError(ValueError):
@@ -45,23 +74,83 @@ class PluginError(ValueError):
 _LOADED: dict[str, dict] = {}
 _FOLDERS: dict[Path, dict] = {}
 _SOURCES: dict[str, dict[str, str]] = {}      # digest -> the files as hashed (shipped to workers)
+_ENTRY_POINTS: dict[str, dict] = {}           # "name = value" -> its record, once loaded
+_BUILTIN_LOADED = False
 
+
+# ---- built-ins -------------------------------------------------------------------
 
 def import_package(package: str) -> None:
-    """Import every module of a built-in plugin package (gpmotion.tasks, ...)."""
+    """Import every module of a built-in plugin package (gpmotion.tasks, ...), sorted."""
     pkg = importlib.import_module(package)
-    for info in pkgutil.iter_modules(pkg.__path__):
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda i: i.name):
         if not info.name.startswith("_"):
             importlib.import_module(f"{package}.{info.name}")
 
 
+def load_builtin() -> None:
+    """The shipped primitives and tasks, then the installed entry points (once)."""
+    global _BUILTIN_LOADED
+    if _BUILTIN_LOADED:
+        return
+    _BUILTIN_LOADED = True
+    from .gp import primitives
+    primitives.load_builtin()
+    import_package("gpmotion.tasks")
+    load_entry_points()
+
+
 # ---- folders ---------------------------------------------------------------------
 
-def plugin_files(folder: str | Path) -> list[Path]:
-    """The files the loader reads: ``*.py`` and ``*.toml`` not starting with ``_``."""
+@dataclass(frozen=True)
+class Manifest:
+    """What the loader reads from a folder: module stems and figure stems, in order."""
+    modules: tuple[str, ...]
+    figures: tuple[str, ...]
+    declared: bool              # False: no manifest, the old every-file rule
+
+
+def read_manifest(folder: str | Path) -> Manifest:
+    """The folder's manifest, checked: one PluginError line for any problem."""
     folder = Path(folder)
-    return sorted(p for p in folder.iterdir() if p.suffix in SUFFIXES and p.is_file()
-                  and not p.name.startswith("_"))
+    path = folder / MANIFEST
+    if not path.is_file():
+        files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix in SUFFIXES
+                       and not p.name.startswith("_"))
+        return Manifest(tuple(p.stem for p in files if p.suffix == ".py"),
+                        tuple(p.stem for p in files if p.suffix == ".toml"), declared=False)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise PluginError(f"{path}: not valid TOML ({e})") from None
+    unknown = sorted(set(data) - {"modules", "figures"})
+    if unknown:
+        raise PluginError(f"{path}: unknown key(s) {unknown}; a manifest has 'modules' and 'figures'")
+    out = {}
+    for key, suffix in (("modules", ".py"), ("figures", ".toml")):
+        names = data.get(key, [])
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise PluginError(f"{path}: '{key}' must be a list of file names without {suffix}")
+        if len(names) > MAX_FILES or len(set(names)) != len(names):
+            raise PluginError(f"{path}: '{key}' names a file twice or more than {MAX_FILES} files")
+        for n in names:
+            if not _FILE_STEM.match(n):
+                raise PluginError(f"{path}: '{key}' entry {_short(n)} is not a plain file name "
+                                  f"(letters, digits, _; no {suffix}, no folders)")
+            if not (folder / f"{n}{suffix}").is_file():
+                raise PluginError(f"{path}: '{key}' names {n}{suffix}, which is not in {folder}")
+        out[key] = tuple(names)
+    if not out["modules"] and not out["figures"]:
+        raise PluginError(f"{path}: names no modules and no figures")
+    return Manifest(out["modules"], out["figures"], declared=True)
+
+
+def plugin_files(folder: str | Path) -> list[Path]:
+    """The files the loader reads (and the digest covers): the manifest and what it names."""
+    folder = Path(folder)
+    m = read_manifest(folder)
+    files = [folder / f"{n}.py" for n in m.modules] + [folder / f"{n}.toml" for n in m.figures]
+    return sorted(files + ([folder / MANIFEST] if m.declared else []))
 
 
 def _digest_of(named_bytes: list[tuple[str, bytes]]) -> str:
@@ -80,30 +169,51 @@ def _read(folder) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in plugin_files(folder)}
 
 
-def load_folder(folder: str | Path) -> dict:
-    """Import a plugin folder the *user* named; returns its requirement record.
+def _import_file(path: Path, tag: str) -> None:
+    """Import one plugin module under a name private to its folder (runs its decorators)."""
+    modname = f"gpmotion_plugin_{tag}_{path.stem}"
+    if modname in sys.modules:
+        return
+    spec = importlib.util.spec_from_file_location(modname, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[modname] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception:
+        del sys.modules[modname]
+        raise
 
-    Never call this with a path read from a file: that is what :func:`require`
-    is for.
+
+def load_folder(folder: str | Path) -> dict:
+    """Load a plugin folder the *user* named; returns its requirement record.
+
+    Imports the modules its manifest names, in order (their decorators register
+    primitives and tasks), then registers its figures by file name.  Never call
+    this with a path read from a file: that is what :func:`require` is for.
     """
-    from .figures import figure_names, register_figure
-    from .gp import primitives
-    from .task import _load_builtin
+    from .cache import digest
+    from .figures import register_figure
     path = Path(os.fspath(folder)).resolve()
     if not path.is_dir():
         raise PluginError(f"--plugins: no such folder: {folder}")
     if path in _FOLDERS:
         return {k: v for k, v in _FOLDERS[path].items() if k != "folder"}
+    manifest = read_manifest(path)
     files = _read(path)
     record = {"name": path.name, "digest": _digest_of(list(files.items()))}
     if record["digest"] in _LOADED:           # the same code from another place: loaded already
         return record
-    _load_builtin()               # built-ins first, so a clash names the user's file
-    primitives.load_builtin()
-    primitives.load_plugins(path)
-    for toml in (p for p in plugin_files(path) if p.suffix == ".toml"):
-        if toml.stem not in figure_names():
-            register_figure(toml.stem, toml)
+    load_builtin()                            # built-ins first, so a clash names the user's file
+    if not manifest.declared:
+        warnings.warn(f"plugin folder {path} has no {MANIFEST}: loading every *.py and *.toml in "
+                      f"it (the old rule, removed in the next release); add a manifest naming "
+                      f"them: modules = {list(manifest.modules)}, figures = {list(manifest.figures)}",
+                      FutureWarning, stacklevel=2)
+    tag = digest(str(path))
+    for stem in manifest.modules:
+        _import_file(path / f"{stem}.py", tag)
+    for stem in manifest.figures:
+        register_figure(stem, path / f"{stem}.toml")
     _FOLDERS[path] = _LOADED[record["digest"]] = {**record, "folder": str(path)}
     try:
         _SOURCES[record["digest"]] = {n: b.decode("utf-8") for n, b in files.items()}
@@ -118,33 +228,48 @@ def load_entry_points() -> list[dict]:
     """Import the installed ``gpmotion.plugins`` entry points; their requirement records.
 
     An entry point names a module (imported: its decorators register things) or
-    a callable (called with no arguments).  Its digest covers the module's file.
+    a callable (called once, with no arguments).  Each is loaded once per
+    process.  Its digest covers the entry point and the module's file.  One
+    that fails to load is reported in a warning and skipped (as Gymnasium
+    does), so one broken package does not stop every command; a run that
+    needs it then says so.
     """
     from importlib.metadata import entry_points
     records = []
-    for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
-        obj = ep.load()
-        if callable(obj):
-            obj()
-        module = importlib.import_module(ep.module)
-        src = Path(getattr(module, "__file__", "") or "")
-        data = src.read_bytes() if src.is_file() else ep.value.encode()
-        dist = getattr(ep, "dist", None)
-        record = {"name": ep.name, "digest": _digest_of([(ep.value, data)]),
-                  "entry_point": ep.value,
-                  "distribution": f"{dist.name}=={dist.version}" if dist else ""}
-        _LOADED[record["digest"]] = record
-        records.append(record)
+    for ep in sorted(entry_points(group=GROUP), key=lambda e: (e.name, e.value)):
+        key = f"{ep.name} = {ep.value}"
+        if key not in _ENTRY_POINTS:
+            try:
+                record = _load_entry_point(ep)
+            except Exception as e:  # noqa: BLE001 - a broken installed plugin is reported, not fatal
+                warnings.warn(f"gpmotion plugin entry point {key!r} failed to load "
+                              f"({type(e).__name__}: {e}); skipped", RuntimeWarning, stacklevel=2)
+                continue
+            _ENTRY_POINTS[key] = _LOADED[record["digest"]] = record
+        records.append(_ENTRY_POINTS[key])
     return records
 
 
-def activate(folders=()) -> list[dict]:
-    """What a command does first: entry points, then the ``--plugins`` folders.
+def _load_entry_point(ep) -> dict:
+    obj = ep.load()
+    if callable(obj):
+        obj()
+    module = importlib.import_module(ep.module)
+    src = Path(getattr(module, "__file__", "") or "")
+    data = src.read_bytes() if src.is_file() else b""
+    dist = getattr(ep, "dist", None)
+    return {"name": ep.name, "digest": _digest_of([(ep.value, data)]), "entry_point": ep.value,
+            "distribution": f"{dist.name}=={dist.version}" if dist else ""}
 
-    Returns the requirement records of what this call loaded (what a new run records).
+
+def activate(folders=()) -> list[dict]:
+    """What a command does first: built-ins and entry points, then the ``--plugins`` folders.
+
+    Returns the requirement records of what this command uses (what a new run records).
     """
     if isinstance(folders, (str, os.PathLike)):
         folders = [folders]
+    load_builtin()
     records = load_entry_points() + [load_folder(f) for f in folders]
     # this command's plugins only (a long-lived process may have loaded others before)
     unique = {r["digest"]: r for r in records}
@@ -265,7 +390,7 @@ def install_sources(shipped) -> None:
         folder = cache_dir().parent / "plugins" / digest / _safe_name(item["name"])
         folder.mkdir(parents=True, exist_ok=True)
         for name, text in files.items():
-            if Path(name).name != name or not name.endswith(SUFFIXES):
+            if Path(name).name != name or not name.endswith(SUFFIXES) or name.startswith("."):
                 raise PluginError(f"plugin {item['name']!r}: bad file name {name!r}")
             target = folder / name
             if not target.exists() or target.read_text(encoding="utf-8") != text:

@@ -6,7 +6,7 @@ from pathlib import Path
 from .evaluate import InProcessEvaluator
 from .families import make_family
 from .records import FormatError, read_json
-from .task import get_task
+from .task import get_task, task_id
 
 
 def replay_genome(task, family, actuation, genome):
@@ -22,7 +22,9 @@ def load_controller(path: str | Path):
 
     Parsed with a whitelist (primitive and terminal names, size caps).  The
     file's ``plugins`` are requirements checked against the plugins the user
-    loaded (``--plugins``, entry points): a file never runs code.
+    loaded (``--plugins``, entry points): nothing the file names is imported,
+    though the replay runs the code of the task it names (loaded already).
+    A bare task name (a record from before versioned ids) means its v1.
     """
     path = Path(path)
     if path.is_dir():
@@ -31,7 +33,7 @@ def load_controller(path: str | Path):
     from .plugins import require
     require(rec.get("plugins"), str(path))
     try:
-        task = get_task(str(rec["task"]), **dict(rec.get("params", {})))
+        task = get_task(task_id(str(rec["task"]), recorded=True), **dict(rec.get("params", {})))
         family = make_family(str(rec["family"]), task, **dict(rec.get("options", {})))
         genome = family.from_json(rec["genome"])
         actuation = str(rec.get("actuation") or family.default_actuation)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .evaluate import spec_of
 from .families import make_family
 from .records import ConfigError, FormatError, validate_number
@@ -29,7 +29,7 @@ from .rundir import RunDir
 from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
                         search_settings, settings_mismatch)
 from .search.adapters import make_search
-from .task import Task, get_task
+from .task import Task, get_task, task_id
 
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
@@ -55,6 +55,8 @@ def build(cfg: RunConfig):
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
+        from .compose.robust import normalize
+        cfg.robust = normalize(cfg.robust, task)     # the figure's default sizes filled in
         search = make_search(family, cfg.seed, **_search_options(cfg, task))
     except TypeError as e:           # an option the constructor does not take
         raise ConfigError(f"{cfg.task} ({cfg.family}): {e}") from None
@@ -66,6 +68,8 @@ def _search_options(cfg: RunConfig, task: Task) -> dict:
     """cfg.search, with GP's ring-migration size fitted to small islands (the
     user cannot set ``migrants``; its default 2 needs islands of 4)."""
     opts = {k: v for k, v in cfg.search.items() if v is not None}
+    if cfg.robust and cfg.family == "gp":     # new starts each generation: costs never carry over
+        opts.setdefault("reuse_costs", False)
     if cfg.family == "gp" and "migrants" not in opts:
         from .search.adapters import GP_DEFAULTS
         pop = opts.get("population", task.gp_defaults.get("population", GP_DEFAULTS["population"]))
@@ -77,9 +81,10 @@ def _search_options(cfg: RunConfig, task: Task) -> dict:
 
 def _evaluator(cfg, task, family, actuation, backend=None):
     from .evaluators import make_evaluator
+    robust = {**cfg.robust, "seed": cfg.seed} if cfg.robust else None   # starts: (seed, generation)
     return make_evaluator(task, family, workers=cfg.workers, scheduler=cfg.scheduler,
                           actuation=actuation, threads=cfg.threads, plugins=cfg.plugins,
-                          **(backend or {}))
+                          robust=robust, **(backend or {}))
 
 
 # ------------------------------------------------------------------ progress
@@ -222,6 +227,9 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
     try:
         if resume:
             rd, cfg, doc = _open_resume(out)
+            cfg.task = task_id(cfg.task, recorded=True)      # bare: recorded before ids, its v1
+            if given is not None and given.task in (cfg.task, cfg.task.rsplit("-v", 1)[0]):
+                given.task = cfg.task                        # the bare name of the recorded task
             task, family, search, actuation = build(cfg)
             if given is not None:
                 check_resume_request(given, cfg, doc, search, rd.path)
@@ -235,6 +243,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                 search.extend(doc["extended_generations"], search.schedule)
         else:       # validate everything (the scheduler too) before touching the disk
             task, family, search, actuation = build(cfg)
+            cfg.task = task.id                                # records store the versioned id
             evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd = RunDir.create(out, force=force)
             from .plugins import for_record
@@ -412,7 +421,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             if max_generations is not None and done_now >= max_generations:
                 break
             genomes = search.ask()
-            ev = evaluator.evaluate(genomes, search.progress)
+            ev = evaluator.evaluate(genomes, search.progress, generation=search.generation)
             told = False
             search.tell(ev)
             row = _log_row(search, ev, rec.evals + len(genomes), time.perf_counter() - t0)
@@ -460,7 +469,7 @@ def _versions():
 
 def controller_record(cfg: RunConfig, task: Task, family, actuation, genome, cost) -> dict:
     """The safe-JSON controller file (best.json, or a user's controller)."""
-    return {"task": task.name, "params": dict(task.p), "family": family.name,
+    return {"task": task.id, "params": dict(task.params), "family": family.name,
             "options": dict(family.options), "actuation": actuation, "plugins": list(cfg.plugins),
             "genome": family.to_json(genome), "cost": float(cost), "seed": cfg.seed}
 
@@ -490,7 +499,7 @@ def write_artifacts(rd: RunDir, task, family, genome, traj):
 
 def plot_gp_trees(path, task, family, genome):
     from .treeplot import plot_trees
-    names = [task.fig.actuator_names[i] for i in family.actuators]
+    names = [task.figure.actuator_names[i] for i in family.actuators]
     plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 

@@ -31,12 +31,14 @@ class RunConfig:
     scheduler: str | None = None
     threads: int | None = None
     plugins: list = field(default_factory=list)
+    robust: dict = field(default_factory=dict)          # perturbed starts (compose.robust); {} off
 
     def to_json(self) -> dict:
         return dict(task=self.task, family=self.family, seed=self.seed, params=self.params,
                     family_options=self.family_options, search=self.search,
                     actuation=self.actuation, workers=self.workers, scheduler=self.scheduler,
-                    threads=self.threads, plugins=self.plugins)
+                    threads=self.threads, plugins=self.plugins,
+                    **({"robust": self.robust} if self.robust else {}))   # older configs: none
 
     @classmethod
     def from_json(cls, d, source: str = "config.json") -> "RunConfig":
@@ -71,7 +73,7 @@ class RunConfig:
 _TYPES = {"task": (str,), "family": (str,), "seed": (int,), "params": (dict,),
           "family_options": (dict,), "search": (dict,), "actuation": (str, None),
           "workers": (int,), "scheduler": (str, None), "threads": (int, None),
-          "plugins": (list,)}
+          "plugins": (list,), "robust": (dict,)}
 _NAMES = {str: "a string", int: "an integer", float: "a number", bool: "true/false",
           dict: "an object", list: "a list", None: "null"}
 
@@ -185,7 +187,7 @@ def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
                    getattr(stored, k), getattr(given, k))
     if given.params:
         from .task import get_task
-        now = get_task(given.task, **given.params).p
+        now = get_task(given.task, **given.params).params
         rec = (doc.get("task_config") or {}).get("params") or {}
         for k in given.params:
             if not _same(now.get(k), rec.get(k)):
@@ -200,3 +202,6 @@ def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
             refuse(_flag(k), eff.get(k, stored.search.get(k)), v)
     if given.actuation and given.actuation != doc.get("actuation"):
         refuse("--actuation", doc.get("actuation"), given.actuation)
+    for k, v in (given.robust or {}).items():              # --robust-starts, --perturb ...
+        if not _same(v, stored.robust.get(k)):
+            refuse(f"robust {k}", stored.robust.get(k), v)

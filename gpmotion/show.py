@@ -51,11 +51,11 @@ def _bsr_senses(fig) -> list[str]:
 def describe_task(name: str) -> str:
     """A task's parameters, terms, figure, controlled joints, sites and senses."""
     task = get_task(name)
-    fig = task.fig
+    fig = task.figure
     controlled = [fig.actuator_names[i] for i in task.controlled_actuators()]
     held = [n for n in fig.actuator_names if n not in controlled]
     gp_defaults = ", ".join(f"{k} {v}" for k, v in task.gp_defaults.items())
-    lines = [f"{task.name}: {task.description}",
+    lines = [f"{task.id}: {task.description}",
              f"figure: {fig.name} ({fig.dimensions}-D, {fig.root} root, {fig.total_mass:.2f} kg, "
              f"{fig.n_act} actuated joints); episode {task.seconds:g} s at dt {task.dt * 1e3:g} ms",
              f"success: {task.success_threshold or '(no success test)'}",
@@ -73,6 +73,7 @@ def describe_task(name: str) -> str:
         lines.append(_wrap("held at their neutral pose by PD", held))
     lines += [_wrap("sites", fig.site_names), _wrap("contacts", fig.contact_names),
               _wrap("GP terminals (senses)", task.terminal_names()),
+              _wrap("GP primitives (the task's set; --primitives to change)", task.primitives),
               _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
               f"GP search defaults: {gp_defaults or 'population 300, generations 40'}"]
     return "\n".join(lines)

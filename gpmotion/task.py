@@ -5,6 +5,7 @@ A task is one small file in ``tasks/`` (or a user's ``--plugins`` folder):
     @register_task
     class LampHop(Task):
         name = "lamp_hop"
+        version = 1                      # its id: "lamp_hop-v1"
         figure = "lamp"
         params = {"distance": 0.4, "seconds": 3.0}
         terms = (Term("distance", 1.0, main=True), Term("late", 0.1, phase=(0.2, 0.6)))
@@ -14,17 +15,36 @@ Scores are costs (lower is better, as Gritz & Hahn); BSR's serial search is
 told the same numbers and minimizes them.  Every term's raw value, weight
 and phase-in factor are returned, so logs and replays show why a controller
 scored as it did (like Gymnasium's ``reward_info``).
+
+A class declares *names and defaults*; an instance holds what they resolve
+to: ``Task.figure`` is the figure's registry name and ``task.figure`` the
+compiled :class:`~gpmotion.model.Figure` (the task's own copy);
+``Task.params`` holds the defaults and ``task.params`` the values in force.
+
+Versions (as Gymnasium's ``register(id=...)``): a task's id is ``name-vN``;
+the bare name means the newest registered version.  Publish a changed score
+as a new version (a class with ``version = 2``) so results recorded under
+the old id keep their meaning.  Records store the id; a record written
+before ids existed names the bare task, which means its v1 (:func:`task_id`
+with ``recorded=True``).
+
+The GP function set is named by the task (``primitives``, default
+:data:`gpmotion.gp.primitives.STANDARD`), never "whatever is registered", so
+a primitive added by a plugin changes no existing task's runs.
 """
 from __future__ import annotations
 
 import copy
 import math
+import re
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
 from .figures import load_figure
+from .gp.primitives import STANDARD
 from .model import Figure, Scene, make_scene
 
 WORST = 1e6        # cost of a diverged episode: finite, so JSON logs stay valid
@@ -73,12 +93,27 @@ class Ease:
         return self.start + (end - self.start) * ramp(self.phase, progress)
 
 
+class _ClassProperty:
+    """A read-only property that also works on the class (``LampHop.id``)."""
+
+    def __init__(self, fget):
+        self.fget, self.__doc__ = fget, fget.__doc__
+
+    def __get__(self, obj, cls):
+        return self.fget(cls)
+
+
 class Task:
-    """Base class; subclasses set the class attributes and ``measure``."""
+    """Base class; subclasses set the class attributes and ``measure``.
+
+    On an instance ``figure`` is the compiled Figure and ``params`` the values
+    in force (on the class: the figure's registry name and the defaults)."""
     name: ClassVar[str] = ""
-    figure: ClassVar[str] = ""
+    version: ClassVar[int] = 1                        # the id is f"{name}-v{version}"
+    figure: str | Figure = ""                         # class: a registry name; instance: a Figure
     description: ClassVar[str] = ""
-    params: ClassVar[dict] = {"seconds": 3.0}
+    params: dict = {"seconds": 3.0}                   # class: defaults; instance: values
+    primitives: ClassVar[tuple[str, ...]] = STANDARD  # the GP function set, in opcode order
     bounds: ClassVar[dict[str, tuple[float, float]]] = {}   # parameter -> (lo, hi), inclusive
     param_docs: ClassVar[dict[str, str]] = {}            # parameter -> what it means (units)
     terms: ClassVar[tuple[Term, ...]] = ()
@@ -93,15 +128,21 @@ class Task:
     curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
+    @_ClassProperty
+    def id(cls) -> str:
+        """The versioned id, ``name-vN`` (what records store)."""
+        return f"{cls.name}-v{cls.version}"
+
     def __init__(self, **overrides):
         variant = overrides.pop("figure", None)   # a figure variant: name, TOML path or spec dict
-        unknown = set(overrides) - set(self.params)
+        defaults = type(self).params
+        unknown = set(overrides) - set(defaults)
         if unknown:
             raise ValueError(f"task {self.name}: unknown parameter(s) {sorted(unknown)}; "
-                             f"known: {sorted(self.params)}")
-        self.p = dict(self.params)
+                             f"known: {sorted(defaults)}")
+        self.params = dict(defaults)
         for k, v in overrides.items():
-            default = self.params[k]
+            default = defaults[k]
             if isinstance(default, (int, float)) and not isinstance(default, bool):
                 try:
                     v = float(v)
@@ -112,20 +153,20 @@ class Task:
                 if abs(v) > PARAM_BOUND:
                     raise ValueError(f"task {self.name}: parameter {k} must be within "
                                      f"±{PARAM_BOUND:g}, got {v!r}")
-            self.p[k] = v
+            self.params[k] = v
         for k in self.curriculum:
-            if k not in self.params or isinstance(self.params[k], bool):
+            if k not in defaults or isinstance(defaults[k], bool):
                 raise ValueError(f"task {self.name}: curriculum names {k!r}, not a numeric parameter")
         for k, (lo, hi) in self.bounds.items():
-            if not lo <= float(self.p[k]) <= hi:
+            if not lo <= float(self.params[k]) <= hi:
                 raise ValueError(f"task {self.name}: parameter {k} must be within {lo:g}..{hi:g}, "
-                                 f"got {self.p[k]:g}")
+                                 f"got {self.params[k]:g}")
         shortest = max(0.05, 2 * self.record_every * self.dt)     # a few recorded frames
-        if not shortest <= float(self.p.get("seconds", 1.0)) <= 120:
+        if not shortest <= float(self.params.get("seconds", 1.0)) <= 120:
             raise ValueError(f"task {self.name}: seconds must be in [{shortest:g}, 120], "
-                             f"got {self.p['seconds']}")
+                             f"got {self.params['seconds']}")
         self.validate()
-        self.fig: Figure = load_figure(self.figure)
+        self.figure = load_figure(type(self).figure)
         if variant is not None:
             self._use_variant(variant)
 
@@ -133,7 +174,7 @@ class Task:
         """Run on a variant of the task's figure; it must have every actuated joint,
         site, contact and terminal sense the task reads (checked by name)."""
         fig = load_figure(spec)
-        base = self.fig
+        base = self.figure
         if (fig.dimensions, fig.root) != (base.dimensions, base.root):
             raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D with a "
                              f"{fig.root} root; the task is written for {base.name}, "
@@ -146,18 +187,33 @@ class Task:
         if missing:
             raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "
                              f"(the task uses them on {base.name})")
-        self.fig, self.figure = fig, fig.name
-        self.p["figure"] = spec
+        self.figure = fig
+        self.params["figure"] = spec
+
+    # ---- old spellings, kept for one release ------------------------------
+    @property
+    def fig(self) -> Figure:
+        """Deprecated: ``task.figure`` (the instance's Figure)."""
+        warnings.warn("Task.fig is deprecated: use task.figure (a Figure on an instance)",
+                      DeprecationWarning, stacklevel=2)
+        return self.figure
+
+    @property
+    def p(self) -> dict:
+        """Deprecated: ``task.params`` (the instance's values)."""
+        warnings.warn("Task.p is deprecated: use task.params (the values on an instance)",
+                      DeprecationWarning, stacklevel=2)
+        return self.params
 
     # ---- things a task may override -------------------------------------
     def validate(self) -> None:
         """Check parameter values; raise ValueError with one clear line."""
 
     def scene(self) -> Scene:
-        return make_scene(**self.fig.ground)
+        return make_scene(**self.figure.ground)
 
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.fig.q_default.copy(), np.zeros(self.fig.nv)
+        return self.figure.q_default.copy(), np.zeros(self.figure.nv)
 
     def measure(self, traj) -> dict[str, np.ndarray]:
         """Raw value of every term, each an array over episodes."""
@@ -174,7 +230,7 @@ class Task:
     # ---- the harness uses these ------------------------------------------
     @property
     def seconds(self) -> float:
-        return float(self.p["seconds"])
+        return float(self.params["seconds"])
 
     @property
     def n_steps(self) -> int:
@@ -182,23 +238,23 @@ class Task:
 
     def controlled_actuators(self) -> list[int]:
         """Indices (into the figure's actuators) of the joints the controller drives."""
-        names = self.fig.actuator_names
+        names = self.figure.actuator_names
         if self.controlled is None:
             return list(range(len(names)))
         missing = [n for n in self.controlled if n not in names]
         if missing:
-            raise ValueError(f"task {self.name}: {missing} are not actuated joints of {self.figure}")
+            raise ValueError(f"task {self.name}: {missing} are not actuated joints of {self.figure.name}")
         return [names.index(n) for n in self.controlled]
 
     def terminal_names(self) -> list[str]:
-        names = list(self.terminals) if self.terminals is not None else list(self.fig.sense_names)
+        names = list(self.terminals) if self.terminals is not None else list(self.figure.sense_names)
         for n in names:
-            self.fig.sense_index(n)        # raises on an unknown sense
+            self.figure.sense_index(n)        # raises on an unknown sense
         return names
 
     def params_at(self, progress: float) -> dict:
         """The parameters in force at run progress (the curriculum applied)."""
-        return {**self.p, **{k: e.value(float(self.p[k]), progress)
+        return {**self.params, **{k: e.value(float(self.params[k]), progress)
                              for k, e in self.curriculum.items()}}
 
     def scene_at(self, progress: float = 1.0) -> Scene:
@@ -206,7 +262,7 @@ class Task:
         if not self.curriculum:
             return self.scene()
         staged = copy.copy(self)
-        staged.p = self.params_at(progress)
+        staged.params = self.params_at(progress)
         return staged.scene()
 
     def phase(self, progress: float) -> tuple:
@@ -255,7 +311,7 @@ class Task:
         return rows
 
     def config(self) -> dict:
-        return {"task": self.name, "figure": self.figure, "params": dict(self.p),
+        return {"task": self.id, "figure": self.figure.name, "params": dict(self.params),
                 "actuation": self.actuation,
                 "terms": [dict(name=t.name, weight=t.weight, phase=list(t.phase), main=t.main)
                           for t in self.terms],
@@ -264,41 +320,92 @@ class Task:
 
 
 # ---- registry --------------------------------------------------------------
-_TASKS: dict[str, type[Task]] = {}
-_LOADED = False
+_TASKS: dict[str, type[Task]] = {}          # id (name-vN) -> class
+_ID = re.compile(r"^(?P<name>.+)-v(?P<version>[0-9]+)$")
 
 
 def register_task(cls: type[Task]) -> type[Task]:
-    """Class decorator: make a task available by ``cls.name``."""
+    """Class decorator: make a task available by its id ``name-vN`` (and its
+    bare name, while it is the newest version)."""
     import inspect
     if not cls.name or not cls.figure:
         raise ValueError(f"{cls.__qualname__}: a task needs 'name' and 'figure'")
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", cls.name):
+        raise ValueError(f"{cls.__qualname__}: task name {cls.name!r} must be an identifier "
+                         "(the version goes in 'version', not the name)")
+    if isinstance(cls.version, bool) or not isinstance(cls.version, int) or cls.version < 1:
+        raise ValueError(f"task {cls.name}: version must be an integer >= 1, got {cls.version!r}")
     if not cls.terms or not any(t.main for t in cls.terms):
         raise ValueError(f"task {cls.name}: needs terms with one main=True term")
-    old = _TASKS.get(cls.name)
+    if (not isinstance(cls.primitives, tuple) or not cls.primitives
+            or not all(isinstance(n, str) for n in cls.primitives)):
+        raise ValueError(f"task {cls.name}: primitives must be a non-empty tuple of primitive names")
+    old = _TASKS.get(cls.id)
     if old is not None and inspect.getsourcefile(old) != inspect.getsourcefile(cls):
-        raise ValueError(f"task {cls.name!r} defined twice: {inspect.getsourcefile(old)} "
+        raise ValueError(f"task {cls.id!r} defined twice: {inspect.getsourcefile(old)} "
                          f"and {inspect.getsourcefile(cls)}")
-    _TASKS[cls.name] = cls
+    _TASKS[cls.id] = cls
     return cls
 
 
-def _load_builtin():
-    global _LOADED
-    if not _LOADED:
-        _LOADED = True
-        from . import plugins
-        plugins.import_package("gpmotion.tasks")
+def _load_builtin() -> None:
+    from . import plugins
+    plugins.load_builtin()
+
+
+def _newest() -> dict[str, str]:
+    """bare name -> id of its newest registered version."""
+    out: dict[str, tuple[int, str]] = {}
+    for tid, cls in _TASKS.items():
+        if cls.version > out.get(cls.name, (0, ""))[0]:
+            out[cls.name] = (cls.version, tid)
+    return {n: tid for n, (_, tid) in out.items()}
 
 
 def task_names() -> list[str]:
+    """The bare names users type (each means its newest version), sorted."""
+    _load_builtin()
+    return sorted(_newest())
+
+
+def task_ids() -> list[str]:
+    """Every registered version's id, sorted."""
     _load_builtin()
     return sorted(_TASKS)
 
 
-def get_task(name: str, **params) -> Task:
+def task_id(name: str, *, recorded: bool = False) -> str:
+    """The id ``name-vN`` a task name stands for.
+
+    A bare name typed by a user means the newest version; a bare name read
+    from a record (``recorded=True``) was written before ids existed, when
+    every task was at its first version, so it means ``name-v1``.
+    """
     _load_builtin()
-    if name not in _TASKS:
+    name = str(name)
+    if name in _TASKS:
+        return name
+    m = _ID.match(name)
+    if m and m["name"] in _newest():
+        known = sorted(t for t, c in _TASKS.items() if c.name == m["name"])
+        raise KeyError(f"task {m['name']!r} has no version v{m['version']}; known: {', '.join(known)}")
+    newest = _newest()
+    if name not in newest:
         from .names import unknown
-        raise KeyError(unknown("task", name, _TASKS))
-    return _TASKS[name](**params)
+        raise KeyError(unknown("task", name, newest))
+    if recorded:
+        if f"{name}-v1" not in _TASKS:
+            raise KeyError(f"the record names task {name!r} without a version (written before "
+                           f"versioned ids: its v1), and {name}-v1 is not registered")
+        return f"{name}-v1"
+    return newest[name]
+
+
+def get_task(name: str, **params) -> Task:
+    """A task instance by id (``lamp_hop-v1``) or bare name (its newest version)."""
+    return _TASKS[task_id(name)](**params)
+
+
+def task_class(name: str, *, recorded: bool = False) -> type[Task]:
+    """The registered class of a task id or bare name (see :func:`task_id`)."""
+    return _TASKS[task_id(name, recorded=recorded)]

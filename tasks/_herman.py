@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gpmotion.task import Term
+from gpmotion.task import Task, Term
 
 FIGURE = "herman"
 ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "wrist_r_x")
@@ -29,7 +29,14 @@ ARM = ("shoulder_r_y", "shoulder_r_z", "shoulder_r_x", "elbow_r", "wrist_r_y", "
 FINGERTIP = ("site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz")
 TERMINALS = (tuple(f"angle_{a}" for a in ARM) + tuple(f"rate_{a}" for a in ARM) + ("t",)
              + FINGERTIP)
-REST_WINDOW = 0.3          # s: "finishing at rest" looks at the fingertip over this tail
+REST_WINDOW = 0.3          # s: the style term "rest" looks at the fingertip over this tail
+# Success is judged on a motion that has come to rest: every Herman task
+# requires the fingertip's speed to stay below REST_SPEED over the last
+# SETTLE seconds (its largest speed there), so a finger swinging through
+# the target at the last frame does not count.  5 cm/s moves the fingertip
+# 5 mm over that window.
+REST_SPEED = 0.05          # m/s
+SETTLE = 0.1               # s
 
 
 # Cost scale: the GP's default roulette selects on 1/(1 + cost), so a cost
@@ -53,6 +60,28 @@ VIEW = {"elev": 10, "azim": -80, "ground": False,
                    "upper_arm_l", "forearm_l", "hand_l"]}
 
 
+class HermanTask(Task):
+    """What every Herman task shares (issue 15: one block, not one copy per
+    task): the figure, the joints under GP and their senses, the GP budget,
+    the picture view, and success = the task's own ``reached`` test AND a
+    motion that has come to rest (``at_rest``).  A task overrides any of
+    these class attributes where it needs more of the body (its file says so).
+    Not registered: a base, not a task."""
+    figure = FIGURE
+    params = {"seconds": 1.5}
+    controlled = ARM
+    terminals = TERMINALS
+    gp_defaults = GP_DEFAULTS
+    view = VIEW
+
+    def reached(self, traj, m) -> np.ndarray:
+        """The task's own goal test per episode (without the rest rule)."""
+        raise NotImplementedError
+
+    def success(self, traj, m):
+        return self.reached(traj, m) & at_rest(m)
+
+
 def goal_scene(point):
     """The default scene with the goal (senses' reference) at a world point (x, y, z)."""
     from gpmotion.model import make_scene
@@ -65,14 +94,17 @@ def site_at_rest(fig, name) -> np.ndarray:
     return geometry3d.sites_world(fig, fig.q_default)[fig.site_names.index(name)]
 
 
-def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ...]:
+def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT,
+                rest_weight: float | None = None) -> tuple[Term, ...]:
     """The style points every Herman arm task shares, phased in after the main goal.
 
     Weights are for a main term worth ``scale`` per unit; at scale 10 (1 per
     10 cm): a hand inside the torso for the whole episode costs 15-30 cm of
     miss, 1° RMS of sway of the held joints 1.7 mm, 100 J of actuator work 2 cm
     (a plain PD step to the nose spends ~110 J), a fingertip still moving at
-    10 cm/s at the end 1 cm."""
+    10 cm/s over the last 0.3 s 3 cm (success needs it below REST_SPEED, so
+    the rest term weighs as much as a miss of the touch threshold; a task whose
+    threshold costs more gives its own ``rest_weight``, per m/s)."""
     terms = [
         Term("through", 0.15 * scale, phase=(0.1, 0.4),
              doc="hand/fingertip inside the torso: fraction of frames + depth/radius"),
@@ -81,7 +113,8 @@ def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT) -> tuple[Term, ..
         Term("energy", 0.0002 * scale, phase=(0.5, 0.9), doc="actuator work over the episode (J)"),
     ]
     if rest:
-        terms.append(Term("rest", 0.1 * scale, phase=(0.2, 0.6),
+        terms.append(Term("rest", 0.3 * scale if rest_weight is None else rest_weight,
+                          phase=(0.2, 0.6),
                           doc=f"mean fingertip speed over the last {REST_WINDOW} s (m/s)"))
     return tuple(terms)
 
@@ -139,12 +172,26 @@ def tail(traj, seconds):
     return traj.times >= traj.times[-1] - seconds - 1e-9
 
 
-def style_measures(traj, rest: bool = True) -> dict[str, np.ndarray]:
-    out = {"through": through_torso(traj), "posture": posture(traj),
-           "energy": traj.energy.sum(axis=1)}
+def style_measures(traj, rest: bool = True, controlled=ARM) -> dict[str, np.ndarray]:
+    """The style terms' raw values, and ``end_speed``: the fingertip's largest
+    speed over the last SETTLE s (m/s), which success compares with REST_SPEED.
+    ``controlled``: the joints under GP (posture watches the others)."""
+    speed = site_speed(traj, "fingertip_r")
+    out = {"through": through_torso(traj), "posture": posture(traj, controlled),
+           "energy": traj.energy.sum(axis=1),
+           "end_speed": speed[:, tail(traj, SETTLE)].max(axis=1)}
     if rest:
-        out["rest"] = site_speed(traj, "fingertip_r")[:, tail(traj, REST_WINDOW)].mean(axis=1)
+        out["rest"] = speed[:, tail(traj, REST_WINDOW)].mean(axis=1)
     return out
+
+
+def at_rest(m) -> np.ndarray:
+    """Per episode: has the motion come to rest (fingertip slower than REST_SPEED
+    throughout the last SETTLE s)?  Part of every Herman task's success."""
+    return m["end_speed"] < REST_SPEED
+
+
+REST_RULE = f"fingertip slower than {REST_SPEED * 100:.0f} cm/s over the last {SETTLE} s"
 
 
 # ---- posing Herman by hand (tests, examples): numpy forward kinematics -------

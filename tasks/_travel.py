@@ -10,7 +10,8 @@ def travel_terms(p):
     """Rewards as negative weights: cost = −(distance + Σ w·secondary)."""
     return (Term("distance", -1.0, main=True, doc="com x displacement (m), rewarded"),
             Term("max_height", -p["w_max_height"], doc="highest com z (m)"),
-            Term("contact_distance", -p["w_contact_distance"], doc="m slid/shuffled in contact"),
+            Term("contact_distance", -p["w_contact_distance"],
+                 doc="m travelled right by points in continuous contact (shuffle)"),
             Term("rotations", -p["w_rotations"], doc="whole-body turns (fractional)"))
 
 
@@ -22,7 +23,8 @@ def travel_measures(traj):
     pitch = traj.base()[..., 0]
     return {"distance": x[:, -1] - x[:, 0],
             "max_height": secondary.max_height(traj.com[..., 1]),
-            "contact_distance": secondary.contact_distance(traj.contact_force, cx),
+            # signed along +x: forward travel while touching pays, sliding in place does not
+            "contact_distance": secondary.contact_distance(traj.contact_force, cx, direction=1.0),
             "rotations": secondary.rotations(pitch, whole=False)}
 
 
@@ -31,7 +33,7 @@ def gait(traj, m, e=0):
     name, f = gaits.gait_of(traj, e)
     contacts = (traj.contact_force[e] > 0).mean(axis=0)
     pattern = ", ".join(f"{n} {100 * c:.0f}%" for n, c in zip(traj.figure.contact_names, contacts))
-    return [f"gait: {name}", *f.lines(), f"slid {m['contact_distance'][e]:.2f} m",
+    return [f"gait: {name}", *f.lines(), f"contact_distance (travel in contact) {m['contact_distance'][e]:.2f} m",
             f"contact time: {pattern}"]
 
 
@@ -50,14 +52,15 @@ class TravelTask(Task):
     success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
     record_every = 20           # 50 frames/s resolve every gait event these terms use
 
-    def validate(self):
-        self.terms = travel_terms(self.p)      # weights are parameters
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        self.terms = travel_terms(self.params)      # weights are parameters (validate() stays pure)
 
     def measure(self, traj):
         return travel_measures(traj)
 
     def success(self, traj, m):
-        return m["distance"] >= self.p["success_distance"]
+        return m["distance"] >= self.params["success_distance"]
 
     def describe(self, traj, m):
         return gait(traj, m)

@@ -11,9 +11,9 @@ to the right at shoulder height.  Style points as every Herman arm task.
 import numpy as np
 
 from gpmotion.sim import geometry3d
-from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, TERMINALS, VIEW, goal_scene, pose_q,
-                                    site_at_rest, style_measures, style_terms)
+from gpmotion.task import Term, register_task
+from gpmotion.tasks._herman import (REST_RULE, HermanTask, goal_scene, pose_q, site_at_rest,
+                                    style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
 
@@ -35,48 +35,44 @@ def pointing_error(traj, target_dir):
 
 
 @register_task
-class HermanPoint(Task):
+class HermanPoint(HermanTask):
     name = "herman_point"
-    figure = FIGURE
     description = "Herman points the right arm in a direction and holds it"
     params = {"azimuth": -45.0, "elevation": 0.0, "seconds": 1.5}
     bounds = {"azimuth": (-180.0, 180.0), "elevation": (-90.0, 90.0)}
     param_docs = {"azimuth": "pointing direction, degrees left of forward",
                   "elevation": "pointing direction, degrees above horizontal",
                   "seconds": "episode length (s)"}
-    controlled = ARM
-    terminals = TERMINALS
-    gp_defaults = GP_DEFAULTS
-    view = VIEW
     goal_label = f"aim point ({GOAL_REACH} m out)"   # pictures: the scene goal, captioned
     terms = (Term("aim", WEIGHT, main=True,
                   doc="mean angle shoulder→fingertip vs the target direction, last third (rad)"),
              Term("bent", WEIGHT, phase=(0.2, 0.5),
                   doc="mean 1 − shoulder–fingertip distance / straight-arm length, last third"),
-             *style_terms(scale=WEIGHT))
+             # still moving at 10 cm/s costs as much as the 8° aim threshold
+             *style_terms(scale=WEIGHT, rest_weight=WEIGHT * AIMED / 0.1))
     success_threshold = (f"mean pointing error over the last third below {np.degrees(AIMED):.0f}°, "
-                         f"arm at least {100 * (1 - BENT):.0f} % extended")
+                         f"arm at least {100 * (1 - BENT):.0f} % extended; {REST_RULE}")
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        f = self.fig
+        f = self.figure
         straight = geometry3d.sites_world(f, pose_q(f, elbow_r=0.0))
         self.arm_length = float(np.linalg.norm(straight[f.site_names.index("fingertip_r")]
                                                - straight[f.site_names.index("shoulder_r")]))
 
     def validate(self):
-        if not -180.0 <= self.p["azimuth"] <= 180.0:
-            raise ValueError(f"herman_point: azimuth must be within -180..180 degrees, got {self.p['azimuth']}")
-        if not -90.0 <= self.p["elevation"] <= 90.0:
-            raise ValueError(f"herman_point: elevation must be within -90..90 degrees, got {self.p['elevation']}")
+        if not -180.0 <= self.params["azimuth"] <= 180.0:
+            raise ValueError(f"herman_point: azimuth must be within -180..180 degrees, got {self.params['azimuth']}")
+        if not -90.0 <= self.params["elevation"] <= 90.0:
+            raise ValueError(f"herman_point: elevation must be within -90..90 degrees, got {self.params['elevation']}")
 
     @property
     def target_dir(self):
-        return direction(self.p["azimuth"], self.p["elevation"])
+        return direction(self.params["azimuth"], self.params["elevation"])
 
     def scene(self):
         # senses: fingertip − a point GOAL_REACH along the direction from the shoulder
-        return goal_scene(site_at_rest(self.fig, "shoulder_r") + GOAL_REACH * self.target_dir)
+        return goal_scene(site_at_rest(self.figure, "shoulder_r") + GOAL_REACH * self.target_dir)
 
     def measure(self, traj):
         err = pointing_error(traj, self.target_dir)
@@ -87,7 +83,7 @@ class HermanPoint(Task):
         out.update(style_measures(traj))
         return out
 
-    def success(self, traj, m):
+    def reached(self, traj, m):
         return (m["aim"] < AIMED) & (m["bent"] < BENT)
 
     def describe(self, traj, m):
@@ -95,5 +91,5 @@ class HermanPoint(Task):
         az = np.degrees(np.arctan2(v[1], v[0]))
         el = np.degrees(np.arctan2(v[2], np.hypot(v[0], v[1])))
         return [f"pointing error {np.degrees(m['aim'][0]):.1f}° over the last third "
-                f"(target az {self.p['azimuth']:.0f}°, el {self.p['elevation']:.0f}°)",
+                f"(target az {self.params['azimuth']:.0f}°, el {self.params['elevation']:.0f}°)",
                 f"arm at the end: az {az:.0f}°, el {el:.0f}°, reach {np.linalg.norm(v):.2f} m"]

@@ -7,16 +7,24 @@ swing pushes the body, and the PD-held legs and trunk must absorb it.  One
 extra term, on from the start: ``balance``, the largest horizontal excursion
 of the pelvis from where it stood (m), plus 1 if it drops by more than
 20 cm (a fall).  The ground is the figure's own (stiff: see its TOML).
+
+``--param forces=1`` adds Gritz & Hahn's force sensors to the terminal set:
+the ground's normal force on each sole point (``force_heel_r``,
+``force_toe_r``, ``force_heel_l``, ``force_toe_l``; N, ~170 each standing
+still), whose shifts tell a controller how the body's weight moves over its
+feet.  Off by default: the measured success rates (docs/gritz_hahn.md) are
+for the default terminal set.
 """
 import numpy as np
 
 from gpmotion.model import make_scene
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import MAIN_WEIGHT
+from gpmotion.tasks._herman import MAIN_WEIGHT, TERMINALS
 from gpmotion.tasks.herman_touch_object import HermanTouchObject
 
 FELL = 0.20            # m: the pelvis dropped this much
 STEADY = 0.05          # m: largest pelvis excursion of a success
+FOOT_FORCES = ("force_heel_r", "force_toe_r", "force_heel_l", "force_toe_l")
 
 
 @register_task
@@ -28,11 +36,20 @@ class HermanReachStanding(HermanTouchObject):
         Term("balance", MAIN_WEIGHT, doc="largest horizontal pelvis excursion (m), +1 if it fell"),)
     success_threshold = (f"{HermanTouchObject.success_threshold}, pelvis within "
                          f"{STEADY * 100:.0f} cm of where it stood")
+    params = {**HermanTouchObject.params, "forces": 0.0}
+    bounds = {**HermanTouchObject.bounds, "forces": (0, 1)}
+    param_docs = {**HermanTouchObject.param_docs,
+                  "forces": "1: the soles' contact forces are terminals too (the paper's force sensors)"}
+
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        if self.params["forces"]:
+            self.terminals = TERMINALS + FOOT_FORCES
 
     def scene(self):
         # herman_standing's own ground (its TOML's [ground]): stiff enough for 70 kg
         goal = self.object_position()
-        return make_scene(goal=tuple(float(v) for v in goal), **self.fig.ground)
+        return make_scene(goal=tuple(float(v) for v in goal), **self.figure.ground)
 
     def measure(self, traj):
         out = super().measure(traj)
@@ -43,8 +60,8 @@ class HermanReachStanding(HermanTouchObject):
         out["balance"] = drift + fell
         return out
 
-    def success(self, traj, m):
-        return super().success(traj, m) & (m["balance"] < STEADY)
+    def reached(self, traj, m):
+        return super().reached(traj, m) & (m["balance"] < STEADY)
 
     def describe(self, traj, m):
         return super().describe(traj, m) + [f"pelvis moved {m['balance'][0] * 100:.1f} cm at most"]

@@ -6,16 +6,19 @@ origin at the pelvis, 0.96 m above the ground): ``x, y, z`` (default: in
 front of the chest), or ``target`` = 0, 1 or 2 to pick one of three preset
 positions (chest front, low right beside the hip, high across to the left);
 ``target = -1`` (default) uses ``x, y, z``.  Main goal: fingertip–object
-distance at the end.  Style points as every Herman arm task.
+distance at the end plus half its mean over the last 0.5 s (arrive, then
+stay); success also needs the motion at rest (``_herman.at_rest``).  Style
+points as every Herman arm task.
 """
 import numpy as np
 
 from gpmotion.sim import geometry3d
-from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, MAIN_WEIGHT, TERMINALS, goal_scene,
-                                    style_measures, style_terms)
+from gpmotion.task import Term, register_task
+from gpmotion.tasks._herman import (MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, style_measures,
+                                    style_terms, tail)
 
 TOUCH = 0.04           # m
+HOLD = 0.5             # s: the window of the averaged distance (arrive, then stay)
 REACH = 0.70           # m: farthest object from the right shoulder (arm 0.77 m)
 PRESETS = (            # pelvis frame (m)
     (0.40, -0.10, 0.30),   # 0: in front of the chest, a little to the right
@@ -25,9 +28,8 @@ PRESETS = (            # pelvis frame (m)
 
 
 @register_task
-class HermanTouchObject(Task):
+class HermanTouchObject(HermanTask):
     name = "herman_touch_object"
-    figure = FIGURE
     description = "Herman touches an object with the right fingertip"
     params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
               "seconds": 1.5}
@@ -36,30 +38,27 @@ class HermanTouchObject(Task):
                             "2 high across to the left; -1 uses x, y, z",
                   "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
                   "z": "object above the pelvis (m)", "seconds": "episode length (s)"}
-    controlled = ARM
-    terminals = TERMINALS
-    gp_defaults = GP_DEFAULTS
-    view = VIEW
     goal_label = "object"          # pictures: the scene goal, captioned
-    terms = (Term("object", MAIN_WEIGHT, main=True, doc="fingertip–object distance at the end (m)"),
+    terms = (Term("object", MAIN_WEIGHT, main=True,
+                  doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              *style_terms())
-    success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end"
+    success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
     def validate(self):
-        t = self.p["target"]
+        t = self.params["target"]
         if t not in (-1.0, 0.0, 1.0, 2.0):
             raise ValueError(f"herman_touch_object: target must be -1 (use x, y, z) or a preset "
                              f"0, 1, 2, got {t}")
 
     def object_position(self) -> np.ndarray:
         """World position of the object."""
-        t = int(self.p["target"])
-        rel = np.array(PRESETS[t] if t >= 0 else (self.p["x"], self.p["y"], self.p["z"]), float)
-        return self.fig.model.fixed_pos + self.fig.model.fixed_rot @ rel
+        t = int(self.params["target"])
+        rel = np.array(PRESETS[t] if t >= 0 else (self.params["x"], self.params["y"], self.params["z"]), float)
+        return self.figure.model.fixed_pos + self.figure.model.fixed_rot @ rel
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        f = self.fig
+        f = self.figure
         shoulder = geometry3d.sites_world(f, f.q_default)[f.site_names.index("shoulder_r")]
         d = float(np.linalg.norm(self.object_position() - shoulder))
         if d > REACH:
@@ -71,18 +70,18 @@ class HermanTouchObject(Task):
 
     def measure(self, traj):
         d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
-        out = {"object": d[:, -1]}
+        out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
         out.update(style_measures(traj))
         return out
 
-    def success(self, traj, m):
-        return m["object"] < TOUCH
+    def reached(self, traj, m):
+        return m["object_end"] < TOUCH
 
     def describe(self, traj, m):
         d = np.linalg.norm(traj.site("fingertip_r")[0] - self.object_position(), axis=-1)
         near = d < TOUCH
         first = f"{traj.times[near.argmax()]:.2f} s" if near.any() else "never"
-        rel = self.object_position() - self.fig.model.fixed_pos
+        rel = self.object_position() - self.figure.model.fixed_pos
         return [f"object at ({rel[0]:.2f}, {rel[1]:.2f}, {rel[2]:.2f}) m from the pelvis: "
                 f"fingertip {d[-1] * 100:.1f} cm away at the end; first touch {first}",
-                f"fingertip speed at the end {m['rest'][0] * 100:.1f} cm/s"]
+                f"fingertip speed over the last 0.1 s ≤ {m['end_speed'][0] * 100:.1f} cm/s"]

@@ -1,8 +1,11 @@
 """herman_wave: Herman raises his right hand above the shoulder and waves it
 from side to side (Gritz & Hahn's humanoid learned "gesturing").
 
+Herman waves, then stops: the wave is judged from 40 % of the episode to
+STOP (0.4 s) before its end, and success also needs the motion at rest at
+the end (``_herman.at_rest``: a wave that ends, not one cut off mid-swing).
 Main goal, a cost in [0, 1] (lower is better), the mean of three parts over
-the second half of the episode:
+that window:
 
 * ``low``    how far the hand is below "5 cm above the shoulder", per frame,
              as a fraction of 0.8 m (0 once it is up there), averaged;
@@ -12,19 +15,21 @@ the second half of the episode:
              while the hand is above the shoulder;
 * ``spread`` 1 − min(y range of the raised hand, 0.2 m) / 0.2 m.
 
-Style points as every Herman arm task except "ends at rest" (it is waving).
+Style points as every Herman arm task.
 """
 import numpy as np
 
-from gpmotion.task import Task, Term, register_task
-from gpmotion.tasks._herman import (ARM, FIGURE, GP_DEFAULTS, VIEW, MAIN_WEIGHT, TERMINALS, goal_scene,
-                                    site_at_rest, style_measures, style_terms)
+from gpmotion.task import Term, register_task
+from gpmotion.tasks._herman import (MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, site_at_rest,
+                                    style_measures, style_terms)
 
 ABOVE = 0.05          # m above the shoulder counts as "raised"
 PASS = 0.05           # m: the smallest lateral movement that counts as a swing
 GOAL_PASSES = 4
 SPREAD = 0.2          # m
 WAVE_AT = (0.05, -0.10, 0.45)   # m from the right shoulder: the senses' goal, a raised hand
+START = 0.4           # the wave is judged from this fraction of the episode ...
+STOP = 0.4            # s: ... to this long before its end (then the hand comes to rest)
 
 
 def count_passes(y, ok, step=PASS):
@@ -54,9 +59,16 @@ def count_passes(y, ok, step=PASS):
     return passes
 
 
+def wave_window(times):
+    """Frames [F] over which the wave is judged (a short episode stops at most
+    half-way through the rest of it, so the window is never empty)."""
+    T = times[-1]
+    return (times >= START * T) & (times <= T - min(STOP, 0.5 * (1.0 - START) * T) + 1e-9)
+
+
 def wave_parts(traj):
     hand, shoulder = traj.site("hand_r"), traj.site("shoulder_r")
-    half = traj.times >= traj.times[-1] / 2.0
+    half = wave_window(traj.times)
     h = hand[:, half, 2] - shoulder[:, half, 2]
     raised = h >= ABOVE
     low = np.clip((ABOVE - h) / 0.8, 0.0, 1.0).mean(axis=1)
@@ -69,38 +81,34 @@ def wave_parts(traj):
 
 
 @register_task
-class HermanWave(Task):
+class HermanWave(HermanTask):
     name = "herman_wave"
-    figure = FIGURE
     description = "Herman raises the right hand above the shoulder and waves"
     params = {"seconds": 2.4}
-    controlled = ARM
-    terminals = TERMINALS
-    gp_defaults = GP_DEFAULTS
-    view = VIEW
     goal_label = "raised-hand point"   # pictures: the scene goal, captioned
     terms = (Term("wave", MAIN_WEIGHT, main=True,
                   doc="mean of: hand below the shoulder, too few passes, too small a swing (0..1)"),
-             *style_terms(rest=False))
-    success_threshold = (f"hand {ABOVE * 100:.0f} cm above the shoulder for >= 80% of the second "
-                         f"half and >= 2 lateral swings of >= {PASS * 100:.0f} cm")
+             *style_terms())
+    success_threshold = (f"hand {ABOVE * 100:.0f} cm above the shoulder for >= 80% of the wave "
+                         f"window ({START:.0%} of the episode to {STOP} s before its end) and "
+                         f">= 2 lateral swings of >= {PASS * 100:.0f} cm there; {REST_RULE}")
 
     def scene(self):
         # senses: fingertip − a point above and a little outside the right shoulder
-        return goal_scene(site_at_rest(self.fig, "shoulder_r") + np.array(WAVE_AT))
+        return goal_scene(site_at_rest(self.figure, "shoulder_r") + np.array(WAVE_AT))
 
     def measure(self, traj):
         p = wave_parts(traj)
         wave = (p["low"] + (1.0 - np.minimum(p["passes"], GOAL_PASSES) / GOAL_PASSES)
                 + (1.0 - np.minimum(p["spread_m"], SPREAD) / SPREAD)) / 3.0
         out = {"wave": wave, "raised": p["raised"], "passes": p["passes"].astype(float)}
-        out.update(style_measures(traj, rest=False))
+        out.update(style_measures(traj))
         return out
 
-    def success(self, traj, m):
+    def reached(self, traj, m):
         return (m["raised"] >= 0.8) & (m["passes"] >= 2)
 
     def describe(self, traj, m):
         p = wave_parts(traj.episode(0))
-        return [f"hand raised {m['raised'][0] * 100:.0f}% of the second half; "
+        return [f"hand raised {m['raised'][0] * 100:.0f}% of the wave window; "
                 f"{int(m['passes'][0])} lateral swings spanning {p['spread_m'][0] * 100:.0f} cm"]

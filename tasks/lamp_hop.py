@@ -20,7 +20,7 @@ def hop_measures(task, traj):
     """The lamp_hop terms (lamp_limbo adds the pole)."""
     fig = traj.figure
     base = traj.site("base_centre")                       # [E, F, 2]
-    goal = np.array([task.p["distance"], 0.0])
+    goal = np.array([task.params["distance"], 0.0])
     d = np.linalg.norm(base - goal, axis=-1)             # [E, F]
     at = d < ARRIVED
     first = np.where(at.any(axis=1), at.argmax(axis=1), d.shape[1] - 1)
@@ -70,11 +70,11 @@ class LampHop(Task):
         return (Subgoal("arrived", "px", "abs_lt", ARRIVED, doc="base within 5 cm of the target"),)
 
     def validate(self):
-        if not 0.05 <= abs(self.p["distance"]) <= 5.0:
-            raise ValueError(f"lamp_hop: distance must be within 0.05..5 m, got {self.p['distance']}")
+        if not 0.05 <= abs(self.params["distance"]) <= 5.0:
+            raise ValueError(f"lamp_hop: distance must be within 0.05..5 m, got {self.params['distance']}")
 
     def scene(self):
-        return make_scene(goal=(self.p["distance"], 0.0))
+        return make_scene(goal=(self.params["distance"], 0.0))
 
     def measure(self, traj):
         return hop_measures(self, traj)

@@ -40,27 +40,27 @@ class LampLimbo(Task):
         pole from the start most runs settle on standing in front of it (2/5
         seeds solved); lowered gradually, the lamp first learns to hop, then to
         duck.  ``pole_start=pole_height`` turns the curriculum off."""
-        start = self.p["pole_start"]
-        if start == self.p["pole_height"]:
+        start = self.params["pole_start"]
+        if start == self.params["pole_height"]:
             return {}
         return {"pole_height": Ease(start, (0.1, 0.5), doc=f"pole lowered from {start:g} m")}
 
     def subgoals(self):
         """Subgoal terminals (GP option ``subgoals``): passed the pole, arrived."""
-        return (Subgoal("passed_pole", "px", "gt", -self.p["distance"] / 2,
+        return (Subgoal("passed_pole", "px", "gt", -self.params["distance"] / 2,
                         doc="base beyond the pole (px is relative to the target)"),
                 Subgoal("arrived", "px", "abs_lt", ARRIVED, doc="base within 5 cm of the target"))
 
     def validate(self):
-        if not 0.1 <= self.p["distance"] <= 5.0:
-            raise ValueError(f"lamp_limbo: distance must be within 0.1..5 m, got {self.p['distance']}")
+        if not 0.1 <= self.params["distance"] <= 5.0:
+            raise ValueError(f"lamp_limbo: distance must be within 0.1..5 m, got {self.params['distance']}")
         for k in ("pole_height", "pole_start"):
-            if not 0.1 <= self.p[k] <= 1.0:
-                raise ValueError(f"lamp_limbo: {k} must be within 0.1..1 m, got {self.p[k]}")
+            if not 0.1 <= self.params[k] <= 1.0:
+                raise ValueError(f"lamp_limbo: {k} must be within 0.1..1 m, got {self.params[k]}")
 
     def scene(self):
-        pole = (self.p["distance"] / 2, self.p["pole_height"] + POLE_RADIUS, POLE_RADIUS)
-        return make_scene(goal=(self.p["distance"], 0.0), poles=[pole])
+        pole = (self.params["distance"] / 2, self.params["pole_height"] + POLE_RADIUS, POLE_RADIUS)
+        return make_scene(goal=(self.params["distance"], 0.0), poles=[pole])
 
     def measure(self, traj):
         m = hop_measures(self, traj)

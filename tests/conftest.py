@@ -6,14 +6,14 @@ import pytest
 
 @pytest.fixture
 def forget_plugins():
-    """Unregister the primitives a test's plugin folder adds: the default GP
-    function set is every registered primitive, so later tests must not see them."""
+    """Forget the primitives a test's plugin folder registers, so another test may
+    register a primitive of the same name from another folder."""
     from gpmotion.gp import primitives
     primitives.load_builtin()                   # built-ins stay registered
-    before, mods = set(primitives.names()), set(sys.modules)
+    saved, mods = dict(primitives._REGISTRY), set(sys.modules)
     yield
-    for name in set(primitives.names()) - before:
-        primitives.unregister(name)
+    primitives._REGISTRY.clear()
+    primitives._REGISTRY.update(saved)
     for m in set(sys.modules) - mods:
         if m.startswith("gpmotion_plugin_"):
             del sys.modules[m]

@@ -1,9 +1,9 @@
 """The Python API: short reprs, real signatures, top-level exports, saving a
 DEAP individual as a controller file, run() without a directory."""
+import ast
 import inspect
 import json
 import random
-import re
 from pathlib import Path
 
 import pytest
@@ -45,6 +45,7 @@ def test_check_primitive_of_a_plugin(tmp_path, forget_plugins):
     with pytest.raises(ValueError, match=r"unknown primitive 'hypot_api'.*load_plugins"):
         gpmotion.check_primitive("hypot_api")
     (tmp_path / "hyp.py").write_text(PLUGIN)
+    (tmp_path / "gpmotion-plugin.toml").write_text('modules = ["hyp"]\n')
     gpmotion.check_primitive("hypot_api", plugins=tmp_path)
     gpmotion.check_primitive("hypot_api")            # loaded now
 
@@ -53,15 +54,63 @@ def test_top_level_exports_what_the_examples_use():
     for name in ("primitive", "RunConfig", "run", "load_controller", "replay_genome",
                  "make_family", "make_evaluator", "Evaluation", "make_toolbox",
                  "evaluate_population", "save_controller", "load_plugins", "read_json",
-                 "get_task", "Task", "Term", "register_task", "check_primitive"):
+                 "get_task", "Task", "Term", "register_task", "check_primitive", "task_ids",
+                 "STANDARD_PRIMITIVES"):
         assert name in gpmotion.__all__ and hasattr(gpmotion, name), name
     assert callable(gpmotion.run) and "out" in inspect.signature(gpmotion.run).parameters
-    for path in sorted((ROOT / "examples").glob("*.py")):
-        for line in path.read_text().splitlines():
-            m = re.match(r"\s*(from|import)\s+(gpmotion[\w.]*)", line)
-            assert not m or m.group(2) == "gpmotion", f"{path.name}: {line.strip()}"
-    assert (ROOT / "gpmotion" / "py.typed").exists()
-    assert '"py.typed"' in (ROOT / "pyproject.toml").read_text()
+
+
+def _gpmotion_uses(tree):
+    """(line, what) for every import of gpmotion and every ``gpmotion.<name>`` reached."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            yield from ((node.lineno, f"import {a.name}") for a in node.names
+                        if a.name.split(".")[0] == "gpmotion")
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "gpmotion":
+            yield node.lineno, f"from {node.module} import " + ", ".join(a.name for a in node.names)
+            if node.module == "gpmotion":
+                yield from ((node.lineno, f"gpmotion.{a.name}") for a in node.names)
+        elif (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+              and node.value.id == "gpmotion"):
+            yield node.lineno, f"gpmotion.{node.attr}"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "examples").glob("*.py")), ids=lambda p: p.name)
+def test_examples_use_only_the_top_level_api(path):
+    """No ``gpmotion.<sub>`` import or attribute: what an example needs, gpmotion exports."""
+    bad = []
+    for line, what in _gpmotion_uses(ast.parse(path.read_text(), str(path))):
+        deep = what.startswith(("import gpmotion.", "from gpmotion."))
+        missing = what.startswith("gpmotion.") and what.split(".", 1)[1] not in gpmotion.__all__
+        if deep or missing:
+            bad.append(f"{path.name}:{line}: {what}")
+    assert not bad, bad
+
+
+def test_the_deep_import_check_catches_deep_imports():
+    tree = ast.parse("import gpmotion.sim\nfrom gpmotion.task import Task\n"
+                     "from gpmotion import (get_task,\n    run)\nimport gpmotion\ngpmotion.families.X\n")
+    found = [w for _, w in _gpmotion_uses(tree)]
+    assert "import gpmotion.sim" in found and "from gpmotion.task import Task" in found
+    assert "gpmotion.families" in found and "gpmotion.get_task" in found
+
+
+def test_the_wheel_ships_py_typed_and_every_package():
+    """pyproject lists every package under gpmotion/ (a new one would not be installed)
+    and ships py.typed, the shipped figures, tasks and primitives."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:
+        import tomli as tomllib
+    conf = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert "py.typed" in conf["package-data"]["gpmotion"] and (ROOT / "gpmotion" / "py.typed").exists()
+    assert conf["package-data"]["gpmotion.figures"] == ["*.toml"]
+    on_disk = {".".join(p.parent.relative_to(ROOT).parts)
+               for p in (ROOT / "gpmotion").rglob("__init__.py")}
+    on_disk |= {"gpmotion.primitives", "gpmotion.tasks"}
+    assert on_disk <= set(conf["packages"]), sorted(on_disk - set(conf["packages"]))
+    assert conf["package-dir"] == {"gpmotion": "gpmotion", "gpmotion.primitives": "primitives",
+                                   "gpmotion.tasks": "tasks"}
 
 
 def test_a_deap_individual_saved_as_a_controller_replays(tmp_path, capsys):

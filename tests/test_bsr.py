@@ -324,6 +324,60 @@ def test_secondary_terms():
     assert S.rotations(np.stack([wrapped, np.zeros(400)])).tolist() == [2.0, 0.0]
 
 
+def test_contact_distance_is_distance_traversed_not_jitter():
+    # a foot sliding to and fro in place for 10 frames traverses nothing
+    # (the old per-frame |Δx| sum paid 0.9 m for it)
+    jitter = (np.arange(10) % 2 * 0.1)[:, None]
+    touching = np.ones_like(jitter)
+    assert S.contact_distance(touching, jitter) == pytest.approx(0.1)        # net of the stretch
+    assert S.contact_distance(touching, jitter - jitter[-1]) == pytest.approx(0.1)
+    assert S.contact_distance(np.r_[touching, [[1.0]]], np.r_[jitter, [[0.0]]], direction=1.0) == 0.0
+    # two stretches: 2 m back, lift off, 3 m forward
+    x = np.array([0, -1, -2, 5, 6, 8], float)[:, None]
+    f = np.array([1, 1, 1, 0, 1, 1], float)[:, None]
+    assert S.contact_distance(f, x) == pytest.approx(4.0)                  # |−2| + |+2|
+    assert S.contact_distance(f, x, direction=1.0) == pytest.approx(0.0)   # −2 + 2
+    assert S.contact_distance(f, x, direction=-1.0) == pytest.approx(0.0)
+    np.testing.assert_allclose(S.contact_distance(np.stack([f, f]), np.stack([x, 3 * x]),
+                                                  direction=1.0), [0.0, 0.0])
+    np.testing.assert_allclose(S.contact_distance(np.stack([f, f]), np.stack([x, 3 * x])), [4.0, 12.0])
+
+
+def test_travel_contact_distance_pays_forward_travel_only():
+    from gpmotion.tasks._travel import travel_measures
+    from gpmotion.task import get_task
+    task = get_task("starman_travel")
+
+    class Traj:                           # two recorded frames of one episode
+        figure = task.figure
+        com = np.zeros((1, 3, 4))
+        contact_force = np.ones((1, 3, len(task.figure.contact_names)))
+        _q = np.repeat(task.figure.q_default[None, None], 3, axis=1)
+
+        def poses(self):
+            from gpmotion.sim import geometry
+            return geometry.link_poses(task.figure.model, self._q)
+
+        def base(self):
+            return self.poses()[..., task.figure.model.base_link, :]
+
+    t = Traj()
+    t._q[0, :, 0] = [0.0, -0.3, 0.0]      # slid back and forth: nothing traversed
+    assert travel_measures(t)["contact_distance"][0] == pytest.approx(0.0)
+    t._q[0, :, 0] = [0.0, -0.3, -0.5]     # every point slid 0.5 m left: a cost
+    n = len(task.figure.contact_names)
+    assert travel_measures(t)["contact_distance"][0] == pytest.approx(-0.5 * n)
+
+
+def test_travel_validate_is_pure():
+    from gpmotion.task import get_task
+    task = get_task("beryl_travel", w_rotations=2.0)
+    before = dict(vars(task))
+    task.validate()
+    assert vars(task) == before and all(vars(task)[k] is v for k, v in before.items())
+    assert [t.weight for t in task.terms] == [-1.0, -0.0, -0.0, -2.0]
+
+
 def test_table1_indices_and_normalized_trajectory():
     names = ["px", "com_z", "com_vz", "angle_a", "angle_b", "rate_a", "rate_b",
              "force_1", "force_2", "force_3"]
@@ -433,3 +487,20 @@ def test_starman_legs_can_swing_over_the_top():
         lo, hi = lim[names.index(leg)]
         reach = min(abs(rest + lo), abs(rest + hi))          # closest approach to the head
         assert reach < 0.5, (leg, reach)
+
+
+def test_beryl_can_tuck():
+    # a tumble needs the knees to the chest: at full hip flexion the thigh is
+    # within 0.8 rad of the torso and the knee above the hip (before: 1.0 rad of
+    # flexion, the knee 0.2 m below the hip, and Beryl only hopped)
+    import gpmotion
+    from gpmotion.sim import geometry
+    fig = gpmotion.load_figure("beryl")
+    m = fig.model
+    q = fig.q_default.copy()
+    for j, name in enumerate(fig.actuator_names):
+        if name.startswith("hip"):
+            q[m.act_dof[j]] = fig.actuator_limits()[j, 1]
+    pts = geometry.points_world(m, geometry.link_poses(m, q[None]), m.cp_link, m.cp_pos)[0]
+    z = dict(zip(fig.contact_names, pts[:, 1]))
+    assert z["knee_l"] > z["hip"] + 0.25 and z["knee_r"] > z["hip"] + 0.25

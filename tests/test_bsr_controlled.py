@@ -25,13 +25,13 @@ def _genomes(task, rng):
 
 def test_bsr_genome_has_parameters_for_the_driven_joints_only(task):
     driven = task.controlled_actuators()
-    assert len(driven) == 6 < task.fig.n_act
+    assert len(driven) == 6 < task.figure.n_act
     rng = np.random.default_rng(0)
     for name, rules in (("bsr-time", 4), ("bsr-sense", 8)):
         fam = make_family(name, task)
         g = fam.random(rng)
         assert g.theta0.shape == (rules, 6) and g.limits.shape == (6, 2)
-        assert np.array_equal(g.limits, task.fig.actuator_limits()[driven])
+        assert np.array_equal(g.limits, task.figure.actuator_limits()[driven])
         assert fam.from_json(fam.to_json(g)).n_act == 6
         ci = fam.encode([g]).ci[0]
         head = 3 if name == "bsr-time" else 3 + len(fam.sense_indices)   # time: [R, n_act, variable]
@@ -41,8 +41,8 @@ def test_bsr_genome_has_parameters_for_the_driven_joints_only(task):
 @pytest.mark.parametrize("actuation", ["kinematic", "pd"])
 def test_undriven_joints_hold_neutral_alike_under_gp_and_bsr(task, actuation):
     driven = task.controlled_actuators()
-    held = [a for a in range(task.fig.n_act) if a not in driven]
-    neutral = task.fig.model.neutral[held]
+    held = [a for a in range(task.figure.n_act) if a not in driven]
+    neutral = task.figure.model.neutral[held]
     trajs = {}
     for name, (fam, g) in _genomes(task, np.random.default_rng(1)).items():
         ev = InProcessEvaluator(task, fam, actuation)
@@ -52,6 +52,6 @@ def test_undriven_joints_hold_neutral_alike_under_gp_and_bsr(task, actuation):
     g = _genomes(task, np.random.default_rng(1))["bsr-time"][1]
     assert np.array_equal(bsr.targets[0, 0, driven], g.theta0[0])     # rule 0 drives the arm
     if actuation == "kinematic":           # prescribed joints: the held ones move identically
-        dofs = task.fig.model.act_dof[held]
+        dofs = task.figure.model.act_dof[held]
         for name in ("bsr-time", "bsr-sense"):
             assert np.array_equal(trajs[name].qd[0][:, dofs], trajs["gp"].qd[0][:, dofs])

@@ -21,7 +21,7 @@ def write_controller(path, family="gp", task="starman_travel", seconds=1.0, seed
         genome = f.from_json({"kind": "gp", "pset": f.info.hash, "trees": GP_TREES})
     else:
         genome = f.random(np.random.default_rng(seed))
-    rec = {"task": t.name, "params": dict(t.p), "family": family, "options": dict(f.options),
+    rec = {"task": t.name, "params": dict(t.params), "family": family, "options": dict(f.options),
            "actuation": f.default_actuation, "genome": f.to_json(genome)}
     atomic_write_json(path, envelope("best", rec))
     return path
@@ -215,3 +215,70 @@ def test_3d_rollout_continues_exactly_from_its_end_state():
     b = rollout(fig, sc, ctrl, n_steps=300, record_every=10, q0=a.q[:, -1], qd0=a.qd[:, -1],
                 contact0=a.contact_end)
     np.testing.assert_array_equal(np.concatenate([a.q, b.q[:, 1:]], axis=1), full.q)
+
+
+# ---------------------------------------------------------------- per-phase scenes; replay/render/export
+
+POLE = [[0.3, 0.25, 0.02]]
+
+
+def _phased(ctrl_dir, tmp_path, pole_phase=1):
+    phases = [{"name": "a", "controller": str(ctrl_dir / "time.json"), "scene": {"goal": [0.5, 0.0]}},
+              {"name": "b", "controller": str(ctrl_dir / "gp.json")}]
+    phases[pole_phase]["scene"] = {"poles": POLE, "goal": [1.5, 0.0]}
+    path = tmp_path / f"phased{pole_phase}.json"
+    atomic_write_json(path, envelope("composite", {"seconds": 2.0, "phases": phases, "switches": [1.0]}))
+    return path
+
+
+def test_each_phase_runs_in_its_own_scene(ctrl_dir, tmp_path):
+    from gpmotion.compose import script as S
+    comp = C.load(_phased(ctrl_dir, tmp_path))
+    assert len(comp.scenes[0].poles) == 0 and len(comp.scenes[1].poles) == 1
+    assert comp.scenes[0].goal[0] == 0.5 and comp.scenes[1].goal[0] == 1.5
+    # the pole is in the world only in its phase: phase 1 is the same motion as with no pole at all
+    no_pole = C.assemble(comp.parts, comp.switches, comp.seconds, None, [{"goal": [0.5, 0.0]}, {}])
+    a, bounds = C.run(comp)
+    b, _ = C.run(no_pole)
+    s1 = bounds[0, 1]
+    np.testing.assert_array_equal(a.q[:, :s1 + 1], b.q[:, :s1 + 1])
+    # goals are the phase's: the script's goal_x reads each phase's scene
+    s = S.parse("phase a = goal_x\nphase b = goal_x\ntotal = a + b\n")
+    v = S.evaluate(s, a, bounds, comp.scenes)
+    assert v["a"][0] == 0.5 and v["b"][0] == 1.5 and v["total"][0] == 2.0
+    # the file keeps each phase's scene
+    C.save(tmp_path / "again.json", comp)
+    again = C.load(tmp_path / "again.json")
+    assert [len(sc.poles) for sc in again.scenes] == [0, 1]
+    assert C.to_obj(again)["phases"][1]["scene"]["poles"] == POLE
+
+
+def test_a_phase_without_a_scene_gets_its_own_tasks(ctrl_dir):
+    comp = C.from_controllers([ctrl_dir / "time.json", ctrl_dir / "lamp.json"][:1] * 2)
+    task_scene = comp.parts[0].task.scene_at(1.0)
+    assert all(np.array_equal(sc.goal, task_scene.goal) for sc in comp.scenes)
+
+
+def test_replay_render_and_export_take_a_composite(ctrl_dir, tmp_path, capsys):
+    from gpmotion.cli import main
+    path = _phased(ctrl_dir, tmp_path)
+    assert main(["replay", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["phase"] for p in out["phases"]] == ["a", "b"] and out["switches"] == [1.0]
+    assert out["phases"][0]["end_s"] == out["phases"][1]["start_s"] == 1.0
+    assert main(["export", str(path), "--bvh", str(tmp_path / "m.bvh")]) == 0
+    frames = int(next(line for line in (tmp_path / "m.bvh").read_text().splitlines()
+                      if line.startswith("Frames:")).split()[1])
+    assert frames == C.load(path).n_frames
+    assert main(["render", str(path), "-o", str(tmp_path / "m.png"), "--gif", str(tmp_path / "m.gif")]) == 0
+    from PIL import Image
+    with Image.open(tmp_path / "m.png") as im:
+        assert im.height > 1.5 * im.width / 3           # one strip per phase, stacked
+    with Image.open(tmp_path / "m.gif") as im:
+        assert im.n_frames > 2
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"format": "gpmotion-composite", "version": 1, "phases": []}))
+    capsys.readouterr()
+    assert main(["replay", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "phases" in err[0]

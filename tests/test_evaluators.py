@@ -114,7 +114,7 @@ def test_worker_error_propagates_without_retry(task):
 # ---- chunking and reassembly (cheap fake path: threads, fake family) -----------------------
 
 class _FakeTask:
-    name, p, n_steps = "fake", {}, 300
+    name, id, params, n_steps = "fake", "fake-v1", {}, 300
 
 
 class _FakeFamily:

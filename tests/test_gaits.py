@@ -155,3 +155,52 @@ def test_real_trajectory_of_a_standing_starman():
     assert name == "other" and abs(f.distance) < 0.05
     assert f.feet_down == 1.0 and f.flights == 0
     assert abs(f.turns) < 0.05
+
+
+# -- benchmarks/auslander_2d.py: every run resumable -------------------------------------
+def _study():
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "auslander_2d.py"
+    spec = importlib.util.spec_from_file_location("auslander_2d", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    mod.CONFIGS["tiny"] = ("starman_travel", "bsr-time", {"seconds": 0.5}, {}, ("hop",), "tiny")
+    return mod
+
+
+def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys):
+    from gpmotion.run import run
+    from gpmotion.runconfig import RunConfig
+    study = _study()
+    whole = study.run_one("tiny", 3, 60, str(tmp_path / "a"))
+    # a study killed mid-run leaves a checkpointed run folder; the next call resumes it
+    cfg = RunConfig(task="starman_travel", family="bsr-time", seed=3, params={"seconds": 0.5},
+                    threads=1, search={"n_working": 10, "n_generations": 5, "reseed_every": 200})
+    run(cfg, tmp_path / "b" / "runs" / "tiny-seed3-60", quiet=True, artifacts=False,
+        max_generations=2)
+    cut = study.run_one("tiny", 3, 60, str(tmp_path / "b"))
+    assert cut["resumed"] and not whole["resumed"]
+    assert cut["genome"] == whole["genome"] and cut["cost"] == whole["cost"]
+    assert cut["evaluations"] == whole["evaluations"] == 60
+    # finished runs are read back, not rerun; the table names every cell's budget
+    study.run_one("tiny", 4, 40, str(tmp_path / "b"))
+    study.main(["--configs", "tiny", "--seeds", "2", "--first-seed", "3", "--budget", "60",
+                "--out", str(tmp_path / "b"), "--table-only"])
+    out = capsys.readouterr().out
+    assert "| tiny | 2 | 60 ×1, 40 ×1 |" in out
+
+
+def test_study_never_mixes_in_runs_of_other_settings(tmp_path, capsys):
+    study = _study()
+    study.run_one("tiny", 3, 20, str(tmp_path))
+    assert (("tiny", 3, 20) in study.load_results(tmp_path))
+    study.CONFIGS["tiny"] = ("starman_travel", "bsr-time", {"seconds": 0.5, "w_rotations": 1.0}, {},
+                             ("hop",), "tiny")
+    assert study.load_results(tmp_path) == {}          # the stored result is stale: skipped
+    assert "other settings" in capsys.readouterr().err
+    (tmp_path / "tiny-seed3-20.json").unlink()         # its run folder is refused, not resumed
+    with pytest.raises(SystemExit) as e:
+        study.main(["--configs", "tiny", "--seeds", "1", "--first-seed", "3", "--budget", "20",
+                    "--out", str(tmp_path)])
+    assert e.value.code == 2

@@ -27,7 +27,7 @@ def family():
 
 
 def senses_for(family):
-    names = family.task.fig.sense_names
+    names = family.task.figure.sense_names
     return np.linspace(-0.9, 1.3, len(names))
 
 

@@ -83,7 +83,7 @@ def test_lamp_tasks_declare_subgoals_and_the_family_adds_them():
     fam = make_family("gp", limbo, subgoals=True)
     assert fam.info.flag_names == ("passed_pole", "arrived")
     assert fam.info.terminal_names[-2:] == ("passed_pole", "arrived")
-    px = limbo.fig.sense_names.index("px")
+    px = limbo.figure.sense_names.index("px")
     assert fam.subgoal_table == [(px, TESTS["gt"], -0.4), (px, TESTS["abs_lt"], 0.05)]
     assert fam.config()["subgoals"] is True
     genome = [["iflte", "passed_pole", "arrived", "px", "vx"]] * 3

@@ -9,11 +9,12 @@ from gpmotion.check import check_task
 from gpmotion.figures import load_spec
 from gpmotion.sim import geometry3d
 from gpmotion.task import get_task
-from gpmotion.tasks._herman import ARM, TERMINALS, pose_q, reach
+from gpmotion.tasks._herman import ARM, REST_SPEED, SETTLE, TERMINALS, HermanTask, pose_q, reach
 from gpmotion.tasks.herman_touch_object import PRESETS
 from gpmotion.tasks.herman_wave import count_passes
 
-HERMAN_TASKS = ("herman_point", "herman_touch_nose", "herman_touch_object", "herman_wave")
+HERMAN_TASKS = ("herman_point", "herman_touch", "herman_touch_nose", "herman_touch_object",
+                "herman_wave")
 SITES = ("nose", "head_top", "chest", "shoulder_r", "shoulder_l", "hand_r", "hand_l",
          "fingertip_r", "fingertip_l", "foot_r", "foot_l")
 
@@ -123,7 +124,7 @@ def test_herman_task_passes_check_task(name):
 @pytest.mark.parametrize("name", HERMAN_TASKS)
 def test_herman_tasks_drive_only_the_right_arm(name):
     t = get_task(name)
-    assert t.figure == "herman" and tuple(t.controlled) == ARM
+    assert t.figure.name == "herman" and tuple(t.controlled) == ARM
     assert t.success_threshold and 1.0 <= t.seconds <= 3.0
 
 
@@ -135,8 +136,8 @@ def test_touch_nose_main_term_is_zero_at_the_nose_and_large_at_neutral(herman):
     touching = _still(herman, pose_q(herman, **angles))
     neutral = _still(herman, herman.q_default)
     m_touch, m_neutral = task.measure(touching), task.measure(neutral)
-    assert m_touch["nose"][0] < 1e-3 and m_touch["nose_end"][0] < 1e-3
-    assert m_neutral["nose"][0] > 1.0                  # ~0.95 m away, + half of it again
+    assert m_touch["touch"][0] < 1e-3 and m_touch["touch_end"][0] < 1e-3
+    assert m_neutral["touch"][0] > 1.0                 # ~0.95 m away, + half of it again
     assert task.success(touching, m_touch)[0] and not task.success(neutral, m_neutral)[0]
     assert m_touch["through"][0] == 0.0 and m_touch["rest"][0] < 1e-9
 
@@ -234,14 +235,169 @@ def test_herman_task_goals_are_their_targets(herman):
 def test_reach_standing_scores_balance_and_falls():
     from gpmotion.controllers import schedule
     task = get_task("herman_reach_standing", seconds=1.0)
-    assert task.fig.model.jtype[0] == 2                                # a free pelvis
-    hold = schedule.constant(task.fig.model.neutral)
-    still = gpmotion.rollout(task.fig, task.scene(), hold, n_steps=task.n_steps)
+    assert task.figure.model.jtype[0] == 2                                # a free pelvis
+    hold = schedule.constant(task.figure.model.neutral)
+    still = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps)
     _, m, _ = task.score(still)
     assert m["balance"][0] < 0.01                                      # stands where it stood
-    q0 = task.fig.q_default.copy()
+    q0 = task.figure.q_default.copy()
     q0[3:7] = [np.cos(0.3), 0.0, np.sin(0.3), 0.0]                     # leaning 0.6 rad forward
     q0[2] += 0.2
-    fall = gpmotion.rollout(task.fig, task.scene(), hold, n_steps=task.n_steps, q0=q0)
+    fall = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps, q0=q0)
     _, m, ok = task.score(fall)
     assert m["balance"][0] > 1.0 and not ok[0]                         # it fell: +1
+
+
+# ---------------------------------------------------------------- success at rest
+def _passing(fig, q_end, dq, seconds=1.0):
+    """A Trajectory moving at constant joint velocity dq that is at q_end on its last frame."""
+    tr = gpmotion.simulate(fig, seconds)
+    q = q_end + (tr.times - tr.times[-1])[:, None] * dq
+    return replace(tr, q=np.broadcast_to(q, tr.q.shape).copy(), qd=np.zeros_like(tr.qd),
+                   energy=np.zeros_like(tr.energy))
+
+
+def test_touch_succeeds_only_once_the_fingertip_has_come_to_rest(herman):
+    """A finger swinging through the nose on the last frame is not a touch."""
+    task = get_task("herman_touch_nose")
+    nose = _site(herman, herman.q_default, "nose")
+    angles, miss = reach(herman, "fingertip_r", nose, x0=[-1.0, 0.5, 0.0, 2.3, 0.0, 0.0])
+    q_touch = pose_q(herman, **angles)
+    dq = np.zeros_like(q_touch)
+    dq[herman.model.act_q[herman.actuator_names.index("elbow_r")]] = 1.0      # 1 rad/s
+    swinging = _passing(herman, q_touch, dq)
+    m = task.measure(swinging)
+    assert m["touch_end"][0] < 1e-3                       # on the nose at the last frame ...
+    assert m["end_speed"][0] > 5 * REST_SPEED              # ... passing at ~0.3 m/s
+    assert not task.success(swinging, m)[0]
+    creeping = _passing(herman, q_touch, dq * 0.5 * REST_SPEED / m["end_speed"][0])
+    m = task.measure(creeping)
+    assert m["end_speed"][0] < REST_SPEED and task.success(creeping, m)[0]
+
+
+@pytest.mark.parametrize("name", HERMAN_TASKS + ("herman_reach_standing",))
+def test_every_herman_task_requires_rest_and_shares_one_attribute_block(name):
+    cls = type(get_task(name))
+    assert issubclass(cls, HermanTask)
+    for attr in ("controlled", "terminals", "gp_defaults", "view", "success"):
+        assert attr not in vars(cls), f"{name} repeats {attr}: it belongs to HermanTask"
+    assert f"{REST_SPEED * 100:.0f} cm/s" in cls.success_threshold and f"{SETTLE} s" in cls.success_threshold
+
+
+# ---------------------------------------------------------------- touching any site
+def test_touch_any_site_reaches_the_knee_by_bending_at_the_waist(herman):
+    from gpmotion.tasks.herman_touch import WAIST, reach_site
+    task = get_task("herman_touch", site="knee_l")
+    assert tuple(task.controlled) == WAIST + ARM
+    assert {"angle_waist_y", "rate_waist_y"} <= set(task.terminal_names())
+    assert np.allclose(task.scene().goal3, _site(herman, herman.q_default, "knee_l"))
+    starts = [(-0.3, 0.0, -0.3, 0.3, 0.0, 0.0), (-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
+    assert reach_site(herman, "knee_l", ARM, starts) > 0.1                # the arm alone: short
+    assert reach_site(herman, "knee_l", WAIST + ARM,
+                      [(1.0, 0.2, 0.5) + s for s in starts]) < 0.005      # bending: reached
+    assert tuple(get_task("herman_touch", site="belly").controlled) == ARM
+
+
+def test_touch_a_left_arm_site_brings_both_arms_under_gp(herman):
+    from gpmotion.tasks.herman_touch import LEFT_ARM, reach_site
+    task = get_task("herman_touch", site="hand_l")
+    assert tuple(task.controlled) == ARM + LEFT_ARM
+    assert {"angle_elbow_l", "rate_shoulder_l_x"} <= set(task.terminal_names())
+    right = [(-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
+    assert reach_site(herman, "hand_l", ARM, right) > 0.02                # the left hand hangs
+    assert reach_site(herman, "hand_l", ARM + LEFT_ARM,
+                      [r + (-0.8, -0.3, 0.0, 1.5, 0.0, 0.0) for r in right]) < 0.005
+    # posture watches only the PD-held joints: moving the left arm costs nothing
+    q = pose_q(herman, shoulder_l_y=-0.8, elbow_l=1.5)
+    m = task.measure(_still(herman, q))
+    assert m["posture"][0] < 1e-3
+    assert get_task("herman_touch", site="belly").measure(_still(herman, q))["posture"][0] > 0.1
+
+
+def test_touch_site_measures_the_distance_to_that_site(herman):
+    task = get_task("herman_touch", site="chest")
+    chest = _site(herman, herman.q_default, "chest")
+    angles, miss = reach(herman, "fingertip_r", chest + [0.02, 0.0, 0.0],
+                         x0=[-0.8, 0.3, 0.0, 1.5, 0.0, 0.0])
+    assert miss < 1e-3
+    m = task.measure(_still(herman, pose_q(herman, **angles)))
+    assert m["touch_end"][0] == pytest.approx(0.02, abs=1e-3) and task.success(None, m)[0]
+    m = get_task("herman_touch", site="nose").measure(_still(herman, pose_q(herman, **angles)))
+    assert m["touch_end"][0] > 0.3 and not get_task("herman_touch").success(None, m)[0]
+
+
+@pytest.mark.parametrize("site, why", [("bogus", "unknown site"), ("hand_r", "right arm"),
+                                       ("foot_l", "fingertip reaches")])
+def test_touch_rejects_sites_it_cannot_touch(site, why):
+    with pytest.raises(ValueError, match=why):
+        get_task("herman_touch", site=site)
+
+
+def test_touch_bad_site_on_the_command_line_is_one_line_exit_2(capsys):
+    from gpmotion.cli import main
+    code = main(["run", "herman_touch", "--param", "site=foot_l", "--generations", "1",
+                 "--population", "4", "--quiet", "--no-artifacts", "--out", "/nonexistent/x"])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "foot_l" in err[0]
+
+
+def test_reach_standing_force_senses_read_the_soles_ground_forces():
+    """--param forces=1: the four sole contact forces are terminals, and what the
+    controller reads is the ground's force (standing still: they carry the weight)."""
+    from gpmotion.controllers import schedule
+    from gpmotion.tasks.herman_reach_standing import FOOT_FORCES
+    plain, felt = get_task("herman_reach_standing"), get_task("herman_reach_standing", forces=1)
+    assert not set(FOOT_FORCES) & set(plain.terminal_names())
+    assert set(FOOT_FORCES) <= set(felt.terminal_names())
+    fig = felt.figure
+    tr = gpmotion.rollout(fig, felt.scene(), schedule.constant(fig.model.neutral), n_steps=500,
+                          record_senses=True)
+    total = sum(tr.sense(n)[0, -1] for n in FOOT_FORCES)
+    assert total == pytest.approx(fig.total_mass * 9.81, rel=0.02)
+    with pytest.raises(ValueError, match="forces"):
+        get_task("herman_reach_standing", forces=2)
+
+
+# ---------------------------------------------------------------- holding an object
+def _gravity_torque(fig, q, joint):
+    """Torque (N·m) of gravity about a hinge's axis on everything beyond it, at q."""
+    m = fig.model
+    R, P = geometry3d.link_frames(m, q)
+    j = fig.link_names.index(joint)
+
+    def beyond(k):
+        while k >= 0:
+            if k == j:
+                return True
+            k = int(m.parent[k])
+        return False
+
+    axis = R[j] @ m.axis[j]
+    return sum(np.cross(P[k] + R[k] @ m.com[k] - P[j], [0.0, 0.0, -9.81 * m.mass[k]]) @ axis
+               for k in range(len(m.parent)) if beyond(k))
+
+
+def test_a_held_ball_adds_its_weight_times_its_lever_to_the_shoulder_torque():
+    """herman_holding: a 1 kg ball welded at the right fingertip.  Holding the
+    arm straight out in front, the shoulder servo's static torque balances
+    gravity on the arm and ball, and the ball's share is m·g·(horizontal
+    lever from the shoulder) -- the welded body joined the hand's link."""
+    from gpmotion.controllers import schedule
+    plain, holding = gpmotion.load_figure("herman"), gpmotion.load_figure("herman_holding")
+    assert holding.total_mass == pytest.approx(plain.total_mass + 1.0)
+    m = holding.model
+    target = m.neutral.copy()
+    a = holding.actuator_names.index("shoulder_r_y")
+    target[a], target[holding.actuator_names.index("elbow_r")] = -np.pi / 2, 0.0   # arm out front
+    tr = gpmotion.rollout(holding, gpmotion.make_scene(), schedule.constant(target), n_steps=4000)
+    q, qd = tr.q[0, -1], tr.qd[0, -1]
+    assert np.abs(qd).max() < 1e-4                                          # at rest
+    servo = m.kp[a] * (target[a] - q[m.act_q[a]])                           # PD torque at rest
+    assert servo + _gravity_torque(holding, q, "shoulder_r_y") == pytest.approx(0.0, abs=1e-3)
+    tip = _site(holding, q, "fingertip_r")
+    shoulder = _site(holding, q, "shoulder_r")
+    ball = 1.0 * 9.81 * (tip[0] - shoulder[0])                              # m·g·lever, ~7.5 N·m
+    assert ball > 7.0
+    arm = _gravity_torque(plain, q, "shoulder_r_y")                          # same pose, no ball
+    assert -servo == pytest.approx(arm + ball, rel=1e-4)

@@ -42,11 +42,17 @@ def _plant(folder, marker):
     return folder
 
 
+def _manifest(folder, modules=(), figures=()):
+    (folder / plugins.MANIFEST).write_text(f"modules = {list(modules)!r}\nfigures = {list(figures)!r}\n")
+    return folder
+
+
 def _task_plugin(folder, name, offset="0.0"):
+    """A folder with one task module and the manifest naming it."""
     folder.mkdir(parents=True, exist_ok=True)
     cls = "".join(w.title() for w in name.split("_"))
     (folder / f"{name}.py").write_text(TASK_PLUGIN.format(cls=cls, name=name, offset=offset))
-    return folder
+    return _manifest(folder, modules=[name])
 
 
 def _one_line_error(capsys):
@@ -211,6 +217,7 @@ def test_one_loader_for_primitives_tasks_and_figures(tmp_path, capsys):
     folder.mkdir()
     (folder / "sec_stiff_lamp.toml").write_text('extends = "lamp"\nname = "sec_stiff_lamp"\n'
                                                 '[[joints]]\nname = "elbow"\nkp = 400.0\n')
+    _manifest(folder, figures=["sec_stiff_lamp"])
     before = plugins.folder_digest(folder)
     assert main(["render", "--figure", "sec_stiff_lamp", "--seconds", "0.1", "-o",
                  str(tmp_path / "f.png"), "--plugins", str(folder)]) == 0
@@ -218,3 +225,87 @@ def test_one_loader_for_primitives_tasks_and_figures(tmp_path, capsys):
     assert "sec_stiff_lamp" in figure_names()
     (folder / "sec_stiff_lamp.toml").write_text((folder / "sec_stiff_lamp.toml").read_text() + "\n")
     assert plugins.folder_digest(folder) != before
+
+
+def test_a_manifest_runs_only_the_modules_it_names(tmp_path, capsys):
+    """A stray .py beside the plugin (a scratch script, a test) never runs; the digest covers
+    only the manifest and what it names, so the stray file does not change the run's record."""
+    marker = tmp_path / "MARKER"
+    folder = _plant(tmp_path / "mixed", marker)                 # evil.py: not in the manifest
+    _task_plugin(folder, "sec_manifest_task")
+    _manifest(folder, modules=["sec_manifest_task"])
+    rec = plugins.load_folder(folder)
+    assert not marker.exists(), "a module the manifest does not name ran"
+    from gpmotion.task import task_names
+    assert "sec_manifest_task" in task_names()
+    assert sorted(p.name for p in plugins.plugin_files(folder)) == [plugins.MANIFEST,
+                                                                    "sec_manifest_task.py"]
+    (folder / "evil.py").write_text("raise SystemExit('changed')\n")
+    assert plugins.folder_digest(folder) == rec["digest"]
+
+
+@pytest.mark.parametrize("text, message", [
+    ('modules = ["../evil"]\n', "not a plain file name"),
+    ('modules = ["missing"]\n', "not in"),
+    ('modules = "evil"\n', "must be a list"),
+    ('module = ["evil"]\n', "unknown key"),
+    ('modules = [\n', "not valid TOML"),
+    ('modules = []\n', "names no modules"),
+])
+def test_a_bad_manifest_is_one_line_and_runs_nothing(tmp_path, capsys, text, message):
+    marker = tmp_path / "MARKER"
+    folder = _plant(tmp_path / "bad", marker)
+    (folder / plugins.MANIFEST).write_text(text)
+    with pytest.raises(plugins.PluginError, match=message):
+        plugins.load_folder(folder)
+    capsys.readouterr()
+    assert main(["list", "tasks", "--plugins", str(folder)]) == 2
+    assert message.split()[0] in _one_line_error(capsys)
+    assert not marker.exists()
+
+
+def test_a_folder_without_a_manifest_still_loads_with_a_warning(tmp_path):
+    folder = _task_plugin(tmp_path / "legacy", "sec_legacy_task")
+    (folder / plugins.MANIFEST).unlink()
+    with pytest.warns(FutureWarning, match=r"no gpmotion-plugin.toml.*modules = \['sec_legacy_task'\]"):
+        plugins.load_folder(folder)
+    from gpmotion.task import task_names
+    assert "sec_legacy_task" in task_names()
+
+
+def test_a_manifest_names_figures_and_a_clash_names_both(tmp_path):
+    folder = tmp_path / "figs2"
+    folder.mkdir()
+    (folder / "sec_soft_lamp.toml").write_text('extends = "lamp"\nname = "sec_soft_lamp"\n')
+    plugins.load_folder(_manifest(folder, figures=["sec_soft_lamp"]))
+    from gpmotion import figure_names, load_figure
+    assert "sec_soft_lamp" in figure_names() and load_figure("sec_soft_lamp").name == "sec_soft_lamp"
+    clash = tmp_path / "clash"
+    clash.mkdir()
+    (clash / "lamp.toml").write_text('extends = "lamp"\nname = "lamp"\n')
+    with pytest.raises(ValueError, match=r"figure 'lamp' is already registered.*lamp\.toml"):
+        plugins.load_folder(_manifest(clash, figures=["lamp"]))
+
+
+def test_entry_points_load_once_and_a_broken_one_is_skipped_with_a_warning(tmp_path, monkeypatch):
+    calls = tmp_path / "calls"
+    (tmp_path / "sec_ep_counter.py").write_text(
+        f"from pathlib import Path\n"
+        f"def setup():\n"
+        f"    p = Path({str(calls)!r})\n"
+        f"    p.write_text(p.read_text() + 'x' if p.exists() else 'x')\n")
+    (tmp_path / "sec_ep_broken.py").write_text("raise ImportError('no numpy here')\n")
+    info = tmp_path / "sec_ep_pkg2-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: sec-ep-pkg2\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text("[gpmotion.plugins]\nsec_counter = sec_ep_counter:setup\n"
+                                           "sec_broken = sec_ep_broken\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.warns(RuntimeWarning, match="'sec_broken = sec_ep_broken' failed to load"):
+        first = plugins.activate([])
+    with pytest.warns(RuntimeWarning, match="sec_broken"):
+        second = plugins.activate([])
+    assert calls.read_text() == "x"                       # the callable ran once
+    assert [r for r in first if r["name"] == "sec_counter"] == [r for r in second
+                                                                 if r["name"] == "sec_counter"]
+    assert not any(r["name"] == "sec_broken" for r in second)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from gpmotion import plugins
 from gpmotion.check import check_primitive, njit_copy
 from gpmotion.gp import primitives
 from gpmotion.gp.bytecode import STACK_CAP, encode_trees, tokens_to_tree
@@ -33,15 +34,22 @@ def registry(monkeypatch):
     monkeypatch.setattr(primitives, "_REGISTRY", dict(primitives._REGISTRY))
 
 
+def load_plugins(folder, modules=None):
+    """Load a plugin folder through its manifest (every .py, by default); new primitive names."""
+    modules = sorted(p.stem for p in folder.glob("*.py")) if modules is None else modules
+    (folder / plugins.MANIFEST).write_text(f"modules = {list(modules)!r}\n")
+    before = set(primitives.names())
+    plugins.load_folder(folder)
+    return sorted(set(primitives.names()) - before)
+
+
 def test_builtin_set_is_complete():
     assert {"add", "sub", "mul", "div", "iflte", "ifpos", "sin", "cos", "abs"} <= set(BUILTIN)
     assert primitives.get("div").symbol == "%" and primitives.get("iflte").arity == 4
     assert primitives.get("iflte").select == (0, 1) and primitives.get("iflte").branches == (2, 3)
     assert primitives.get("ifpos").select == (0,) and primitives.get("ifpos").arity == 3
-    assert "ifpos" not in primitives.default_names()          # opt-in: default runs unchanged
-    assert set(primitives.default_names()) == set(BUILTIN) - {"ifpos"}
-    import gpmotion.primitives as builtin_package           # the folder form is the same set
-    assert primitives.load_plugins(builtin_package.__path__[0]) == []
+    assert "ifpos" not in primitives.STANDARD                 # opt-in: default runs unchanged
+    assert primitives.STANDARD == tuple(sorted(set(BUILTIN) - {"ifpos"}))   # the old default set
 
 
 @pytest.mark.parametrize("name, args, want", [
@@ -65,11 +73,12 @@ def test_builtin_primitive_contract(name):
 def test_user_plugin_folder(registry, tmp_path):
     (tmp_path / "hypot.py").write_text(HYPOT)
     assert len(HYPOT.splitlines()) < 15
-    assert primitives.load_plugins(tmp_path) == ["hypot"]
-    assert primitives.load_plugins(tmp_path) == []          # loading again is harmless
+    assert load_plugins(tmp_path) == ["hypot"]
+    assert load_plugins(tmp_path) == []                     # loading again is harmless
     check_primitive("hypot")
-    info = build_pset(["px", "vx"])
-    assert "hypot" in info.primitive_names
+    assert "hypot" not in build_pset(["px", "vx"]).primitive_names    # registered: in no set
+    info = build_pset(["px", "vx"], primitives.STANDARD + ("hypot",))
+    assert info.primitive_names[-1] == "hypot"
     assert "def prim_hypot(a, b)" in interpreter_source(info)
     kernel = load_interpreter(info)
     ci, cf = encode_trees([tokens_to_tree(["hypot", "px", "vx"], info)], info, [0])
@@ -81,7 +90,7 @@ def test_duplicate_name_names_both_files(registry, tmp_path):
         "from gpmotion.gp.primitives import primitive\n"
         "@primitive('add', arity=2)\ndef add(a, b):\n    return b + a\n")
     with pytest.raises(ValueError, match=r"duplicate primitive 'add'.*arithmetic\.py.*my_add\.py"):
-        primitives.load_plugins(tmp_path)
+        load_plugins(tmp_path)
 
 
 @pytest.mark.parametrize("body, arity, message", [
@@ -94,7 +103,7 @@ def test_check_primitive_rejects_bad(registry, tmp_path, body, arity, message):
     (tmp_path / "bad.py").write_text(
         "from gpmotion.gp.primitives import register\n" + body
         + f"register('bad', bad, arity={arity})\n")
-    primitives.load_plugins(tmp_path)
+    load_plugins(tmp_path)
     with pytest.raises(AssertionError, match=message):
         check_primitive("bad")
 
@@ -129,10 +138,10 @@ def test_user_conditional_is_lazy_and_agrees_with_deap(registry, tmp_path):
     from gpmotion.gp.bytecode import OP_JUMP
     from gpmotion.gp.pset import compile_reference
     (tmp_path / "pick3.py").write_text(PICK3)
-    assert primitives.load_plugins(tmp_path) == ["pick3"]
+    assert load_plugins(tmp_path) == ["pick3"]
     check_primitive("pick3")
     p = primitives.get("pick3")
-    assert p.select == (3,) and p.branches == (0, 1, 2) and p.default
+    assert p.select == (3,) and p.branches == (0, 1, 2)
     info = build_pset(["px", "vx"], ["add", "mul", "pick3"])
     kernel = load_interpreter(info)
     tree = tokens_to_tree(["pick3", "add", "px", 1.0, "mul", "px", "vx", "vx", "px"], info)
@@ -167,4 +176,38 @@ def test_bad_conditional_declarations(registry, body, select, message, tmp_path)
         "from gpmotion.gp.primitives import register\n" + body
         + f"register('c', c, arity=3, select={select!r})\n")
     with pytest.raises(ValueError, match=message):
-        primitives.load_plugins(tmp_path)
+        load_plugins(tmp_path)
+
+
+def test_registering_a_primitive_changes_no_task_run(registry, tmp_path):
+    """Every task names its primitive set: a new primitive (a plugin's, registered
+    like any other) leaves each task's set, its hash and its seeded random trees as
+    they were, so runs stay bit for bit and checkpoints still resume."""
+    import random
+
+    from deap import gp
+
+    from gpmotion.families import make_family
+    from gpmotion.task import get_task, task_ids
+
+    def fingerprint(tid):
+        fam = make_family("gp", get_task(tid))
+        random.seed(11)
+        trees = [str(gp.PrimitiveTree(gp.genHalfAndHalf(fam.pset, 1, 5))) for _ in range(20)]
+        return fam.info.primitive_names, fam.info.hash, trees
+
+    ids = task_ids()
+    before = {t: fingerprint(t) for t in ids}
+    (tmp_path / "hypot_run.py").write_text(HYPOT.replace('"hypot"', '"hypot_run"'))
+    assert load_plugins(tmp_path) == ["hypot_run"]
+    for t in ids:
+        assert fingerprint(t) == before[t], t
+    assert all(before[t][0] == primitives.STANDARD for t in ids)   # today's default set, in order
+
+
+def test_default_keyword_is_deprecated(registry):
+    def twice(a):
+        return 2.0 * a
+    with pytest.warns(DeprecationWarning, match="no effect"):
+        primitives.register("twice_dep", twice, 1, default=False)
+    assert "twice_dep" in primitives.names() and "twice_dep" not in primitives.STANDARD

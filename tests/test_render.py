@@ -269,7 +269,7 @@ def test_a_task_goal_and_limbo_pole_are_drawn_and_labelled(drawn, tmp_path):
     import gpmotion
     from gpmotion import render3d
     task = gpmotion.get_task("lamp_limbo", pole_height=0.40)
-    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    traj = gpmotion.simulate(task.figure, 0.05, scene=task.scene())
     render3d.render_any(traj, tmp_path / "limbo.png", task=task)
     fig = drawn["limbo.png"]
     assert len(stars(fig)) == 1 + 10 * 0 + len(fig.axes) - 1   # big one + one per small multiple

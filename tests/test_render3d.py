@@ -127,14 +127,14 @@ def test_render_any_draws_planar_and_3d_trajectories(tmp_path, figure):
 
 def test_a_task_view_draws_a_close_up_of_some_bodies(tmp_path, monkeypatch):
     task = gpmotion.get_task("herman_touch_nose")
-    traj = gpmotion.simulate(task.fig, 0.05, record_every=25)
+    traj = gpmotion.simulate(task.figure, 0.05, record_every=25)
     seen = {}
     monkeypatch.setattr(render3d, "filmstrip3d", lambda path, seg, rad, t, **kw: seen.update(
         seg=seg, rad=rad, **kw))
     render3d.render_any(traj, tmp_path / "f.png", view=task.view)
     names = task.view["bodies"]
-    assert seen["seg"].shape[1] == len(names) == len(seen["rad"]) < len(task.fig.body_names)
-    i = task.fig.body_names.index(names[-1])
+    assert seen["seg"].shape[1] == len(names) == len(seen["rad"]) < len(task.figure.body_names)
+    i = task.figure.body_names.index(names[-1])
     np.testing.assert_array_equal(seen["seg"][:, -1], traj.segments()[0, :, i])
     assert seen["ground_z"] is None and seen["azim"] == task.view["azim"]
     assert task.view["bodies"] == names                   # the task's view is not consumed
@@ -163,7 +163,7 @@ def texts(fig):
 
 def test_a_3d_goal_is_drawn_only_for_a_task_that_names_it(drawn, tmp_path):
     task = gpmotion.get_task("herman_touch_nose")
-    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    traj = gpmotion.simulate(task.figure, 0.05, scene=task.scene())
     render3d.render_any(traj, tmp_path / "task.png", task=task)
     assert len(stars(drawn["task.png"])) >= 1 and "nose at rest" in texts(drawn["task.png"])
     render3d.render_any(traj, tmp_path / "passive.png", view=task.view)
@@ -209,7 +209,7 @@ def test_3d_tick_labels_have_room(drawn, tmp_path):
     running into the next (and "z (m)" sat on the z tick labels: checked by
     eye, the label now has padding)."""
     task = gpmotion.get_task("herman_touch_nose")
-    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    traj = gpmotion.simulate(task.figure, 0.05, scene=task.scene())
     render3d.render_any(traj, tmp_path / "nose.png", view=task.view)
     seg, t = walking_chain(n_frames=10)
     render3d.filmstrip3d(tmp_path / "walk.png", seg, RADII, t)
@@ -230,7 +230,7 @@ def test_animate3d_plays_in_real_time(tmp_path):
 
 def test_a_task_adds_its_own_moments_to_the_filmstrip(monkeypatch, tmp_path):
     task = gpmotion.get_task("herman_touch_nose")
-    traj = gpmotion.simulate(task.fig, 0.05, scene=task.scene())
+    traj = gpmotion.simulate(task.figure, 0.05, scene=task.scene())
     seen = {}
     monkeypatch.setattr(render3d, "filmstrip3d", lambda *a, **kw: seen.update(kw))
     monkeypatch.setattr(task, "picture_events", lambda traj, e: [(3, "first touch")], raising=False)

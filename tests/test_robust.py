@@ -118,3 +118,123 @@ def test_robustness_table_nominal_first_and_deterministic(tmp_path, capsys):
     assert robust_command.main([str(path), "--joint", "-1"]) == 2
     err = capsys.readouterr().err
     assert "perturbation joint must be" in err
+
+
+# ---------------------------------------------------------------- `gpmotion run --robust-starts`
+
+def _robust_cfg(**kw):
+    from gpmotion.run import RunConfig
+    base = dict(task="lamp_hop", family="bsr-time", seed=2, params={"seconds": "0.4"},
+                search={"n_working": 4, "n_generations": 3}, robust={"starts": 3})
+    return RunConfig(**{**base, **kw})
+
+
+def _records(d):
+    import json as _json
+    best = _json.loads((d / "best.json").read_text())
+    return best["genome"], best["cost"], (d / "log.csv").read_text().splitlines()
+
+
+def _costs(d):
+    return [line.split(",")[3] for line in _records(d)[2][1:]]      # best_so_far per generation
+
+
+def test_normalize_fills_the_figures_defaults_and_refuses_bad_values():
+    from gpmotion.records import ConfigError
+    lamp, star = get_task("lamp_hop"), get_task("starman_travel")
+    assert R.normalize({}, lamp) == {}
+    n = R.normalize({"starts": 4}, lamp)
+    assert n == {"starts": 4, "aggregate": "mean", **R.asdict(R.FIGURE_SIZES["lamp"])}
+    assert R.normalize({"starts": 2, "joint": 0.3, "aggregate": "worst"}, star)["joint"] == 0.3
+    assert R.normalize({"starts": 2}, star)["joint"] == R.Perturbation().joint
+    for bad, msg in (({"starts": 0}, "--robust-starts"), ({"starts": 2, "angular": -1}, "angular"),
+                     ({"starts": 2, "aggregate": "median"}, "aggregate"),
+                     ({"starts": 2, "spin": 1}, "unknown setting")):
+        with pytest.raises(ConfigError, match=msg):
+            R.normalize(bad, lamp)
+
+
+def test_batch_evaluation_is_the_aggregate_of_k_perturbed_rollouts():
+    from gpmotion.evaluate import InProcessEvaluator
+    task = get_task("starman_travel", seconds=0.5)
+    fam = make_family("bsr-time", task)
+    genomes = [fam.random(np.random.default_rng(s)) for s in range(3)]
+    setting = {**R.normalize({"starts": 4, "aggregate": "worst"}, task), "seed": 3}
+    ev = InProcessEvaluator(task, fam, robust=setting)
+    got = ev.evaluate(genomes, 1.0, generation=5)
+    costs, _, traj = R.evaluate(task, fam, genomes, k=4, seed=3, round_=5, how="worst")
+    np.testing.assert_array_equal(got.costs, costs)
+    per, measures, ok = task.score(traj)
+    assert list(got.success) == list(ok.reshape(3, 4).all(axis=1))
+    # the measures are the worst start's: the cost recomputed from them is the aggregate
+    np.testing.assert_allclose(task.cost(got.measures, got.failed), costs)
+    assert ev.evaluations == 3
+    other = ev.evaluate(genomes, 1.0, generation=6).costs            # a new generation: new starts
+    assert not np.array_equal(other, got.costs)
+    nominal = InProcessEvaluator(task, fam).evaluate(genomes).costs
+    assert not np.array_equal(nominal, got.costs)
+
+
+def test_a_robust_run_records_its_setting_and_differs_from_a_nominal_one(tmp_path):
+    from gpmotion.run import run
+    run(_robust_cfg(), tmp_path / "r", quiet=True, artifacts=False)
+    run(_robust_cfg(robust={}), tmp_path / "n", quiet=True, artifacts=False)
+    import json as _json
+    doc = _json.loads((tmp_path / "r" / "config.json").read_text())
+    assert doc["run"]["robust"] == {"starts": 3, "aggregate": "mean", **R.asdict(R.FIGURE_SIZES["lamp"])}
+    assert "robust" not in _json.loads((tmp_path / "n" / "config.json").read_text())["run"]
+    assert _costs(tmp_path / "r") != _costs(tmp_path / "n")
+
+
+def test_a_robust_run_resumes_to_the_same_result(tmp_path):
+    from gpmotion.cli import main
+    from gpmotion.run import run
+    ref = tmp_path / "ref"
+    run(_robust_cfg(), ref, quiet=True, artifacts=False)
+    cut = tmp_path / "cut"
+    run(_robust_cfg(), cut, quiet=True, artifacts=False, max_generations=2, checkpoint_every=0)
+    assert not (cut / "best.json").exists()
+    assert main(["resume", str(cut), "--quiet"]) == 0
+    assert _records(cut)[:2] == _records(ref)[:2] and _costs(cut) == _costs(ref)
+
+
+@pytest.mark.slow
+def test_a_robust_run_on_a_process_pool_gives_the_same_result(tmp_path):
+    from gpmotion.run import run
+    run(_robust_cfg(), tmp_path / "ref", quiet=True, artifacts=False)
+    pool = tmp_path / "pool"
+    run(_robust_cfg(workers=2), pool, quiet=True, artifacts=False)       # chunks of 1-2 genomes
+    assert _records(pool)[:2] == _records(tmp_path / "ref")[:2]
+    assert _costs(pool) == _costs(tmp_path / "ref")
+
+
+@pytest.mark.dask
+@pytest.mark.slow
+def test_a_robust_run_on_dask_gives_the_same_result(tmp_path):
+    pytest.importorskip("distributed")
+    from gpmotion.run import run
+    run(_robust_cfg(), tmp_path / "ref", quiet=True, artifacts=False)
+    run(_robust_cfg(scheduler="local", workers=2), tmp_path / "dask", quiet=True, artifacts=False)
+    assert _records(tmp_path / "dask")[:2] == _records(tmp_path / "ref")[:2]
+    assert _costs(tmp_path / "dask") == _costs(tmp_path / "ref")
+
+
+def test_robust_cli_options_and_their_errors(tmp_path, capsys):
+    from gpmotion.cli import main
+    out = tmp_path / "gp"
+    assert main(["run", "lamp_hop", "--param", "seconds=0.3", "--population", "6", "--generations", "2",
+                 "--robust-starts", "2", "--robust-aggregate", "worst", "--perturb", "joint=0.2,angular=0",
+                 "--out", str(out), "--quiet", "--no-artifacts"]) == 0
+    import json as _json
+    rec = _json.loads((out / "config.json").read_text())["run"]
+    assert rec["robust"]["aggregate"] == "worst" and rec["robust"]["joint"] == 0.2
+    assert rec["robust"]["angular"] == 0 and rec["robust"]["velocity"] == R.FIGURE_SIZES["lamp"].velocity
+    assert main(["run", "lamp_hop", "--population", "6", "--generations", "2", "--robust-starts", "3",
+                 "--out", str(out), "--resume", "--quiet"]) == 2
+    assert "robust starts differs" in capsys.readouterr().err
+    for bad in (["--perturb", "spin=1", "--robust-starts", "2"], ["--perturb", "joint=x", "--robust-starts", "2"],
+                ["--robust-starts", "0"], ["--robust-aggregate", "worst"]):
+        assert main(["run", "lamp_hop", "--out", str(tmp_path / "x"), *bad]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("gpmotion: error:"), err
+    assert not (tmp_path / "x").exists()

@@ -1,4 +1,7 @@
-"""The public task contract over every registered task, and a user's plugin task."""
+"""The public task contract over every registered task (every version), a user's plugin
+task, versioned ids and the old spellings."""
+import json
+import re
 import textwrap
 
 import numpy as np
@@ -7,10 +10,10 @@ import pytest
 import gpmotion
 from gpmotion.check import check_task
 from gpmotion.plugins import load_folder
-from gpmotion.task import Term, get_task, task_names
+from gpmotion.task import Term, get_task, task_ids, task_names
 
 
-@pytest.mark.parametrize("name", task_names())
+@pytest.mark.parametrize("name", task_ids())
 def test_every_registered_task_passes_check_task(name):
     check_task(name)
 
@@ -53,8 +56,8 @@ def test_phase_in_ramps_style_terms():
     assert [t.factor(p) for p in (0.0, 0.2, 0.4, 0.6, 1.0)] == pytest.approx([0, 0, 0.5, 1, 1])
     task = get_task("lamp_hop", seconds=0.3)
     from gpmotion.controllers import schedule
-    ctrl = schedule.constant(task.fig.model.neutral)
-    tr = gpmotion.rollout(task.fig, task.scene(), ctrl, n_steps=task.n_steps)
+    ctrl = schedule.constant(task.figure.model.neutral)
+    tr = gpmotion.rollout(task.figure, task.scene(), ctrl, n_steps=task.n_steps)
     early, m, _ = task.score(tr, progress=0.0)
     late, _, _ = task.score(tr, progress=1.0)
     assert early[0] == pytest.approx(m["distance"][0])       # only the main goal at the start
@@ -65,7 +68,7 @@ def test_limbo_pole_hits_are_penalized():
     task = get_task("lamp_limbo", seconds=0.5, pole_height=0.38, distance=0.38)
     # the pole crosses x = 0.19 at 38 cm: right through the neutral lamp's shade
     from gpmotion.controllers import schedule
-    tr = gpmotion.rollout(task.fig, task.scene(), schedule.constant(task.fig.model.neutral),
+    tr = gpmotion.rollout(task.figure, task.scene(), schedule.constant(task.figure.model.neutral),
                           n_steps=task.n_steps)
     cost, m, ok = task.score(tr)
     assert m["pole"][0] >= 1.0 and not ok[0]
@@ -80,7 +83,7 @@ def test_limbo_pole_comes_down_over_the_curriculum():
     a, b = ease.phase
     assert task.params_at(0.0)["pole_height"] == ease.start > 0.5      # above the standing lamp
     assert task.params_at((a + b) / 2)["pole_height"] == pytest.approx((ease.start + 0.40) / 2)
-    assert task.params_at(1.0) == task.p
+    assert task.params_at(1.0) == task.params
     ev = InProcessEvaluator(task, make_family("gp", task))
     assert ev.scene(0.0).poles[0, 1] == pytest.approx(ease.start + 0.01)
     assert ev.scene(1.0).poles[0, 1] == pytest.approx(0.41)
@@ -101,3 +104,118 @@ def test_a_curriculum_must_name_a_numeric_parameter():
         curriculum = {"height": gpmotion.Ease(1.0, (0.0, 0.5))}
     with pytest.raises(ValueError, match="curriculum names 'height'"):
         Bad()
+
+
+# ---- versioned ids ---------------------------------------------------------------
+
+OLD_RUN = __import__("pathlib").Path(__file__).parent / "data" / "old_run_lamp_hop"
+
+V2 = '''
+from gpmotion.tasks.lamp_hop import LampHop
+from gpmotion.task import register_task
+
+
+@register_task
+class LampHopV2(LampHop):
+    version = 2
+    params = {**LampHop.params, "distance": 0.5}
+'''
+
+
+def test_task_ids_are_versioned_and_the_bare_name_is_the_newest(tmp_path):
+    from gpmotion import plugins
+    from gpmotion.task import task_id, task_ids
+    assert get_task("lamp_hop").id == "lamp_hop-v1" == get_task("lamp_hop-v1").id
+    assert all(re.fullmatch(r"[a-z][a-z0-9_]*-v[0-9]+", t) for t in task_ids())
+    assert {t.rsplit("-v", 1)[0] for t in task_ids()} == set(task_names())
+    (tmp_path / "lamp_hop_v2_test.py").write_text(V2)
+    (tmp_path / plugins.MANIFEST).write_text('modules = ["lamp_hop_v2_test"]\n')
+    plugins.load_folder(tmp_path)
+    try:
+        assert get_task("lamp_hop").id == "lamp_hop-v2" and get_task("lamp_hop").params["distance"] == 0.5
+        assert get_task("lamp_hop-v1").params["distance"] == 0.4      # the published score stays
+        assert task_id("lamp_hop", recorded=True) == "lamp_hop-v1"    # a pre-version record
+        assert "lamp_hop" in task_names() and "lamp_hop-v2" in task_ids()
+    finally:
+        from gpmotion import task as task_module
+        task_module._TASKS.pop("lamp_hop-v2")
+    with pytest.raises(KeyError, match="no version v7; known: lamp_hop-v1"):
+        get_task("lamp_hop-v7")
+    with pytest.raises(KeyError, match="did you mean 'lamp_hop'"):
+        get_task("lamp_hopp")
+
+
+def test_a_run_records_the_versioned_id(tmp_path):
+    out = tmp_path / "run"
+    cfg = gpmotion.RunConfig(task="lamp_hop", seed=1, params={"seconds": 0.3},
+                             search={"population": 6, "generations": 1})
+    gpmotion.run(cfg, out, quiet=True, artifacts=False)
+    best = json.loads((out / "best.json").read_text())
+    config = json.loads((out / "config.json").read_text())
+    assert best["task"] == config["run"]["task"] == config["task_config"]["task"] == "lamp_hop-v1"
+    from gpmotion.cli import main
+    assert main(["run", "lamp_hop", "--seed", "1", "--param", "seconds=0.3", "--resume",
+                 "--out", str(out), "--quiet"]) == 0                  # the bare name resumes it
+
+
+def test_a_run_recorded_before_versioned_ids_replays_and_resumes(tmp_path, capsys):
+    """tests/data/old_run_lamp_hop: made by the code before ids (bare 'lamp_hop' everywhere)."""
+    import shutil
+
+    from gpmotion.cli import main
+    run = tmp_path / "old"
+    shutil.copytree(OLD_RUN, run)
+    assert json.loads((run / "best.json").read_text())["task"] == "lamp_hop"
+    capsys.readouterr()
+    assert main(["replay", str(run), "--json"]) == 0
+    replayed = json.loads(capsys.readouterr().out)
+    assert replayed["cost"] == json.loads((run / "best.json").read_text())["final_cost"]
+    assert main(["resume", str(run), "--extend-generations", "1", "--quiet"]) == 0
+    assert json.loads((run / "best.json").read_text())["task"] == "lamp_hop-v1"
+
+
+def test_old_spellings_warn_and_still_work():
+    task = get_task("lamp_hop", seconds=0.3)
+    with pytest.warns(DeprecationWarning, match="task.params"):
+        assert task.p is task.params
+    with pytest.warns(DeprecationWarning, match="task.figure"):
+        assert task.fig is task.figure
+
+
+def test_each_task_owns_its_figure():
+    """load_figure copies: one task changing its figure changes no other task's."""
+    a, b = get_task("lamp_hop"), get_task("lamp_hop")
+    assert a.figure is not b.figure and a.figure.model is not b.figure.model
+    a.figure.q_default[:] = 99.0
+    assert not np.any(b.figure.q_default == 99.0)
+    assert not np.any(gpmotion.load_figure("lamp").q_default == 99.0)
+
+
+@pytest.mark.parametrize("attrs, message", [
+    ({"name": "lamp_x-v2"}, "must be an identifier"),
+    ({"version": 0}, "version must be an integer >= 1"),
+    ({"version": True}, "version must be an integer"),
+    ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
+    ({"primitives": ()}, "primitives must be a non-empty tuple"),
+])
+def test_register_task_rejects_bad_declarations(attrs, message):
+    from gpmotion.task import register_task
+    cls = type("BadDecl", (gpmotion.Task,), {"name": "bad_decl", "figure": "lamp",
+                                             "terms": (Term("x", 1.0, main=True),), **attrs})
+    with pytest.raises(ValueError, match=message):
+        register_task(cls)
+
+
+def test_a_task_naming_an_unknown_primitive_fails_the_contract():
+    class Unknown(gpmotion.Task):
+        name = "unknown_prim"
+        figure = "lamp"
+        params = {"seconds": 0.2}
+        primitives = gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",)
+        terms = (Term("x", 1.0, main=True),)
+
+        def measure(self, traj):
+            return {"x": np.zeros(traj.n_episodes)}
+
+    with pytest.raises(AssertionError, match="unknown primitive 'no_such_primitive'"):
+        check_task(Unknown)

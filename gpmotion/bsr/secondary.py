@@ -18,16 +18,21 @@ def max_height(com_z) -> np.ndarray:
 
 
 def contact_distance(contact_force_frames, contact_x_frames,
-                     force_threshold: float = 0.0) -> np.ndarray:
+                     force_threshold: float = 0.0, direction: float | None = None) -> np.ndarray:
     """Table 3 contact_distance: distance traversed by body parts in
     continuous contact with the ground.
 
     A contact point is *in contact* at a frame when its normal force exceeds
-    ``force_threshold``.  For each point we add |x(f+1) − x(f)| over every pair
-    of consecutive frames in which it is in contact at both ends (so a point
-    that lifts off, moves and lands again contributes nothing for that
-    flight), then sum over the points.  Sampling frames finely enough to
-    resolve lift-off is the caller's job.
+    ``force_threshold``; a *stretch* is a run of consecutive frames in which
+    it is.  Each stretch contributes the net horizontal displacement of the
+    point over it, x(last) − x(first) — what it *traversed* while touching —
+    so sliding to and fro in place adds nothing, and a point that lifts off,
+    moves and lands again contributes nothing for that flight.
+    ``direction`` +1 (−1) counts each stretch signed along +x (−x), so only
+    travel in that direction pays and a backward slide costs (a travel
+    task's reading); ``None`` counts |net| per stretch (either direction).
+    Summed over points.  Sampling frames finely enough to resolve lift-off
+    is the caller's job.
     """
     force = np.asarray(contact_force_frames, dtype=np.float64)
     x = np.asarray(contact_x_frames, dtype=np.float64)
@@ -35,9 +40,24 @@ def contact_distance(contact_force_frames, contact_x_frames,
         raise ValueError(f"contact arrays must share shape [..., n_frames, "
                          f"n_points], got {force.shape} and {x.shape}")
     touching = force > force_threshold
-    both = touching[..., 1:, :] & touching[..., :-1, :]
-    step = np.abs(np.diff(x, axis=-2))
-    return np.where(both, step, 0.0).sum(axis=(-2, -1))
+    both = touching[..., 1:, :] & touching[..., :-1, :]          # step f → f+1 in contact
+    step = np.where(both, np.diff(x, axis=-2), 0.0)
+    if direction is not None:            # Σ over stretches of signed net = Σ of signed steps
+        return np.sign(direction) * step.sum(axis=(-2, -1))
+    return np.abs(_stretch_sums(step, both)).sum(axis=(-2, -1))
+
+
+def _stretch_sums(step, both):
+    """Per run of True in ``both`` (axis −2), the sum of ``step`` over it,
+    placed at the run's last entry (0 elsewhere)."""
+    c = np.cumsum(step, axis=-2)
+    n = both.shape[-2]
+    idx = np.arange(n).reshape((n, 1))
+    prev = np.concatenate([np.zeros_like(both[..., :1, :]), both[..., :-1, :]], axis=-2)
+    nxt = np.concatenate([both[..., 1:, :], np.zeros_like(both[..., :1, :])], axis=-2)
+    start = np.maximum.accumulate(np.where(both & ~prev, idx, 0), axis=-2)
+    before = np.take_along_axis(c, start, axis=-2) - np.take_along_axis(step, start, axis=-2)
+    return np.where(both & ~nxt, c - before, 0.0)
 
 
 def rotations(pitch_frames, whole: bool = True) -> np.ndarray:

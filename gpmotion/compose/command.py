@@ -57,7 +57,7 @@ def run_command(args) -> int:
         comp = C.load(args.composite)
         if switches is not None or args.seconds is not None:
             comp = C.assemble(comp.parts, comp.switches if switches is None else switches,
-                              args.seconds or comp.seconds, comp.scene_settings)
+                              args.seconds or comp.seconds, comp.scene_settings, comp.phase_scene_settings)
     else:
         if len(args.controllers) != script.n_phases:
             raise C.CompositeError(f"the script has {script.n_phases} phase(s) ({', '.join(script.phases)}) "

@@ -17,9 +17,16 @@ File format (JSON, ``format: gpmotion-composite``, version 1)::
 
     {"format": "gpmotion-composite", "version": 1,
      "seconds": 3.5,                       # the whole motion (s)
-     "phases": [{"name": "cartwheel", "controller": "runs/cart/best.json"}, ...],
+     "phases": [{"name": "cartwheel", "controller": "runs/cart/best.json"},
+                {"name": "limbo", "controller": "limbo.json",
+                 "scene": {"poles": [[0.9, 0.3, 0.01]], "goal": [1.2, 0.0]}}, ...],
      "switches": [1.6, 2.5],               # P − 1 switch times (s), non-decreasing
-     "scene": {"goal": [1.0, 0.0]}}        # optional make_scene settings; default: phase 1's task scene
+     "scene": {"goal": [1.0, 0.0]}}        # optional make_scene settings for every phase
+
+Scenes are per phase: a phase's own ``scene`` (make_scene settings), else the
+file's ``scene``, else the scene of the phase's own task.  So a limbo pole is
+in the world only while the limbo controller runs, and each phase's goal is
+the one its controller steers to (GP senses positions relative to the goal).
 
 Controller paths are relative to the composite file; each is read by the
 same safe loader as ``gpmotion replay`` (no code runs).
@@ -65,12 +72,20 @@ class Composite:
     parts: list[Part]
     switches: np.ndarray    # float[P − 1] seconds
     seconds: float
-    scene: Scene
-    scene_settings: dict | None = None   # as written in the file (None: phase 1's task scene)
+    scene: Scene                         # phase 1's (the whole motion's Trajectory carries it)
+    scene_settings: dict | None = None   # as written in the file (None: each phase's task scene)
+    scenes: list | None = None           # per phase (None: ``scene`` for all)
+    phase_scene_settings: list | None = None   # per phase, as written (None entries: not given)
+
+    def __post_init__(self):
+        if self.scenes is None:
+            self.scenes = [self.scene] * len(self.parts)
+        if self.phase_scene_settings is None:
+            self.phase_scene_settings = [None] * len(self.parts)
 
     @property
     def figure(self):
-        return self.parts[0].task.fig
+        return self.parts[0].task.figure
 
     @property
     def dt(self) -> float:
@@ -106,9 +121,9 @@ class Composite:
 def _check_parts(parts: list[Part]) -> None:
     first = parts[0].task
     for p in parts[1:]:
-        if p.task.fig.name != first.fig.name:
-            raise CompositeError(f"phase {p.name!r} controls figure {p.task.fig.name!r}, "
-                                 f"phase {parts[0].name!r} {first.fig.name!r}: one composite, one figure")
+        if p.task.figure.name != first.figure.name:
+            raise CompositeError(f"phase {p.name!r} controls figure {p.task.figure.name!r}, "
+                                 f"phase {parts[0].name!r} {first.figure.name!r}: one composite, one figure")
         if p.task.dt != first.dt:
             raise CompositeError(f"phase {p.name!r} runs at dt {p.task.dt}, phase {parts[0].name!r} at {first.dt}")
 
@@ -129,7 +144,8 @@ def from_controllers(paths, switches=None, seconds=None, scene: dict | None = No
     return assemble(parts, switches, seconds, scene)
 
 
-def assemble(parts: list[Part], switches=None, seconds=None, scene: dict | None = None) -> Composite:
+def assemble(parts: list[Part], switches=None, seconds=None, scene: dict | None = None,
+             phase_scenes: list | None = None) -> Composite:
     _check_parts(parts)
     own = np.cumsum([p.task.seconds for p in parts])
     seconds = float(own[-1] if seconds is None else seconds)
@@ -141,8 +157,10 @@ def assemble(parts: list[Part], switches=None, seconds=None, scene: dict | None 
         raise CompositeError(f"{len(parts)} phases need {len(parts) - 1} switch time(s), got {sw.size}")
     if not np.all(np.isfinite(sw)) or np.any(np.diff(sw) < 0) or (sw.size and (sw[0] < 0 or sw[-1] > seconds)):
         raise CompositeError(f"switch times must be non-decreasing within [0, {seconds}] s, got {sw.tolist()}")
-    sc = parts[0].task.scene_at(1.0) if scene is None else _scene(scene)
-    return Composite(parts, sw.copy(), seconds, sc, scene)
+    phase_scenes = list(phase_scenes or [None] * len(parts))
+    scenes = [_scene(own) if own is not None else _scene(scene) if scene is not None
+              else p.task.scene_at(1.0) for p, own in zip(parts, phase_scenes)]
+    return Composite(parts, sw.copy(), seconds, scenes[0], scene, scenes, phase_scenes)
 
 
 def _scene(settings) -> Scene:
@@ -179,10 +197,13 @@ def _from_obj(obj: dict, base: Path) -> Composite:
     phases = obj.get("phases")
     if not isinstance(phases, list) or not 1 <= len(phases) <= MAX_PHASES:
         raise CompositeError(f"'phases' must be a list of 1..{MAX_PHASES} {{name, controller}} objects")
-    parts = []
+    parts, scenes = [], []
     for k, ph in enumerate(phases):
-        if not isinstance(ph, dict) or not isinstance(ph.get("controller"), str) or set(ph) - {"name", "controller"}:
-            raise CompositeError(f"phases[{k}] must be {{\"name\": ..., \"controller\": \"path\"}}")
+        if (not isinstance(ph, dict) or not isinstance(ph.get("controller"), str)
+                or set(ph) - {"name", "controller", "scene"}):
+            raise CompositeError(f"phases[{k}] must be {{\"name\": ..., \"controller\": \"path\"}} "
+                                 "(and optionally \"scene\": {...})")
+        scenes.append(ph.get("scene"))
         name = ph.get("name", f"phase{k + 1}")
         if not isinstance(name, str) or not name.isidentifier():
             raise CompositeError(f"phases[{k}].name must be a name (letters, digits, _), got {name!r}")
@@ -193,7 +214,10 @@ def _from_obj(obj: dict, base: Path) -> Composite:
                            isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v))
         if not ok:
             raise CompositeError(f"'{key}' must be {'a number' if key == 'seconds' else 'a list of numbers'}")
-    return assemble(parts, switches, seconds, obj.get("scene"))
+    try:
+        return assemble(parts, switches, seconds, obj.get("scene"), scenes)
+    except CompositeError as e:
+        raise CompositeError(str(e)) from None
 
 
 def to_obj(comp: Composite, base: Path | None = None) -> dict:
@@ -201,8 +225,9 @@ def to_obj(comp: Composite, base: Path | None = None) -> dict:
     import os
 
     from ..records import envelope
-    phases = [{"name": p.name, "controller": p.source if base is None else os.path.relpath(p.source, base)}
-              for p in comp.parts]
+    phases = [{"name": p.name, "controller": p.source if base is None else os.path.relpath(p.source, base),
+               **({"scene": sc} if sc is not None else {})}
+              for p, sc in zip(comp.parts, comp.phase_scene_settings)]
     obj = {"seconds": comp.seconds, "phases": phases, "switches": [float(s) for s in comp.switches]}
     if comp.scene_settings is not None:
         obj["scene"] = comp.scene_settings
@@ -248,7 +273,7 @@ def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
         _, lead, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
         reps = active[lead]
         rep_of = reps[inverse.reshape(-1)]                  # each active episode's representative
-        tr = rollout(fig, comp.scene, part.batch(len(reps)), n_steps=dur[reps] * comp.record_every,
+        tr = rollout(fig, comp.scenes[k], part.batch(len(reps)), n_steps=dur[reps] * comp.record_every,
                      q0=q[reps], qd0=qd[reps], contact0=None if contact is None else contact[reps],
                      dt=comp.dt, record_every=comp.record_every, actuation=part.actuation,
                      default_tau=part.family.default_tau, threads=threads)

@@ -24,10 +24,11 @@ KIND_NAMES = {NUMBER: "number", SIGNAL: "signal", POINTS: "points"}
 
 @dataclass
 class Window:
-    """Frames [start[e], end[e]] (inclusive) of each episode."""
+    """Frames [start[e], end[e]] (inclusive) of each episode, and the scene they ran in."""
     start: np.ndarray          # int64[E]
     end: np.ndarray            # int64[E]
     n_frames: int
+    scene: object = None       # the phase's Scene (its goal); None: the trajectory's
 
     @property
     def mask(self) -> np.ndarray:
@@ -183,8 +184,9 @@ MEASURES: dict[str, Measure] = {
                           lambda c, w: max_t(_com_axis("z")(c, w), w)),
     "diverged": Measure(NUMBER, "1 if the simulation diverged (whole episode)",
                         lambda c, w: c.number(c.traj.diverged.astype(float))),
-    "goal_x": Measure(NUMBER, "the scene goal's x (m)", lambda c, w: c.number(np.full(c.E, c.traj.scene.goal[0]))),
-    "goal_z": Measure(NUMBER, "the scene goal's height (m)", lambda c, w: c.number(np.full(c.E, c.traj.scene.goal[1]))),
+    "goal_x": Measure(NUMBER, "the phase's scene goal x (m)", lambda c, w: c.number(np.full(c.E, _scene(c, w).goal[0]))),
+    "goal_z": Measure(NUMBER, "the phase's scene goal height (m)",
+                      lambda c, w: c.number(np.full(c.E, _scene(c, w).goal[1]))),
     # signals (one value per frame)
     "t": Measure(SIGNAL, "time since the window began (s)",
                  lambda c, w: c.signal(c.traj.times[None, :] - c.traj.times[w.start][:, None])),
@@ -206,8 +208,8 @@ MEASURES: dict[str, Measure] = {
                       lambda c, w: c.signal(c.traj.energy)),
     "pole_hit": Measure(SIGNAL, "deepest penetration into a pole since the previous frame (m)",
                         lambda c, w: c.signal(c.traj.pole_hit)),
-    "goal_distance": Measure(SIGNAL, "distance from the centre of mass to the scene goal (m)",
-                             lambda c, w: c.signal(_goal_distance(c.traj, None))),
+    "goal_distance": Measure(SIGNAL, "distance from the centre of mass to the phase's scene goal (m)",
+                             lambda c, w: c.signal(_goal_distance(c.traj, None, _scene(c, w)))),
     # points (per frame, per contact point)
     "y_i": Measure(POINTS, "height of each contact point (m) — the paper's y_i(t)",
                    lambda c, w: c.points()[..., -1]),
@@ -218,13 +220,18 @@ MEASURES: dict[str, Measure] = {
 }
 
 
-def _goal_distance(traj, site: str | None):
-    """Distance [E, F] from the com (or a site) to the scene goal, in the figure's space."""
+def _scene(c, w):
+    """The window's scene (a composite phase's), else the trajectory's."""
+    return c.traj.scene if w.scene is None else w.scene
+
+
+def _goal_distance(traj, site: str | None, scene):
+    """Distance [E, F] from the com (or a site) to the scene's goal, in the figure's space."""
     if site is None:
         p = traj.com[..., :3] if traj.is3d else traj.com[..., :2]
     else:
         p = traj.site(site)
-    goal = traj.scene.goal3 if traj.is3d else traj.scene.goal
+    goal = scene.goal3 if traj.is3d else scene.goal
     return np.linalg.norm(p - goal, axis=-1)
 
 
@@ -271,6 +278,6 @@ FUNCTIONS: dict[str, Function] = {
     "near": Function(("any", "any", "any"), "same", "1 at a = b, 0 from |a − b| ≥ width", lambda c, w, a, b, d: near(a, b, d)),
     "site_x": Function(("name",), "signal", 'x of a named site, e.g. site_x("base_centre") (m)', _site_axis("x")),
     "site_z": Function(("name",), "signal", "height of a named site (m)", _site_axis("z")),
-    "goal_distance_of": Function(("name",), "signal", "distance from a named site to the scene goal (m)",
-                                 lambda c, w, name: c.signal(_goal_distance(c.traj, name))),
+    "goal_distance_of": Function(("name",), "signal", "distance from a named site to the phase's scene goal (m)",
+                                 lambda c, w, name: c.signal(_goal_distance(c.traj, name, _scene(c, w)))),
 }

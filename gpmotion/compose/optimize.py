@@ -21,7 +21,7 @@ def check_match(comp: C.Composite, script: S.Script) -> None:
 def score(comp: C.Composite, script: S.Script, switches, threads: int | None = None):
     """(totals [E], per-phase credits {name: [E]}, trajectory, bounds) for switch times [E, P − 1]."""
     traj, bounds = C.run(comp, switches, threads=threads)
-    values = S.evaluate(script, traj, bounds)
+    values = S.evaluate(script, traj, bounds, comp.scenes)
     return values["total"], values, traj, bounds
 
 
@@ -51,4 +51,4 @@ def search(comp: C.Composite, script: S.Script, *, Q: int = 16, G: int = 16, H: 
 def repaired(comp: C.Composite, ts: TransitionSearch) -> C.Composite:
     """The composite with the search's best switch times."""
     return C.Composite(comp.parts, np.asarray(ts.best, dtype=np.float64).copy(), comp.seconds,
-                       comp.scene, comp.scene_settings)
+                       comp.scene, comp.scene_settings, comp.scenes, comp.phase_scene_settings)

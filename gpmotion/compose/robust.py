@@ -15,6 +15,9 @@ process, the resulting sense-based motion controller can be made more robust."
   episodes of batch, not K separate rollouts.
 * :func:`aggregate` folds the K costs of each controller into one: the mean,
   or the worst.
+* :func:`normalize` / :func:`batch_evaluation`: the ``robust`` setting of a
+  run (``gpmotion run --robust-starts K``): every generation's batch is scored
+  from K starts drawn from (run seed, generation), on every evaluator backend.
 """
 from __future__ import annotations
 
@@ -45,9 +48,33 @@ class Perturbation:
                 raise ValueError(f"perturbation {k} must be a finite number >= 0, got {v!r}")
 
 
+# Per-figure defaults (σ of each part): about the same *relative* push for each
+# figure — the lamp (1.65 kg, 0.4 m) gets a few degrees and millimetres,
+# Star-Man / Beryl (5–8 kg, ~1 m) the class defaults, a standing human less
+# (balance on two feet).  A figure not listed gets ``Perturbation()``.
+FIGURE_SIZES = {
+    "lamp": Perturbation(joint=0.05, position=0.005, orientation=0.03, velocity=0.03, angular=0.1),
+    "starman": Perturbation(),
+    "beryl": Perturbation(),
+    "herman": Perturbation(joint=0.05, position=0.01, orientation=0.03, velocity=0.05, angular=0.1),
+    "herman_standing": Perturbation(joint=0.05, position=0.01, orientation=0.03, velocity=0.05,
+                                    angular=0.1),
+}
+
+
+def sizes_for(figure: str) -> Perturbation:
+    """The default perturbation sizes of a figure (by its registered name)."""
+    return FIGURE_SIZES.get(figure, Perturbation())
+
+
 def round_rng(seed: int, round_: int) -> np.random.Generator:
     """The generator of one round's starts: a function of (seed, round) only."""
     return np.random.default_rng([int(seed), int(round_), 0x0B5A])
+
+
+def trial_rng(seed: int) -> np.random.Generator:
+    """The generator of ``gpmotion robustness``'s trials: never a training round's."""
+    return np.random.default_rng([int(seed), 0x7E57])
 
 
 def perturbed_starts(figure, q0, qd0, k: int, rng: np.random.Generator,
@@ -166,8 +193,8 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
     The starts depend on (seed, round_) only: the same for every backend and after a resume.
     """
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, k, round_rng(seed, round_), sizes)
-    traj = robust_rollout(task.fig, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, k, round_rng(seed, round_), sizes)
+    traj = robust_rollout(task.figure, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation or family.default_actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
@@ -176,18 +203,20 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
 
 
 def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int = 0,
-               sizes: Perturbation = Perturbation(), threads: int | None = None) -> dict:
+               sizes: Perturbation | None = None, threads: int | None = None) -> dict:
     """Success rate and cost spread of one controller over ``trials`` perturbed starts.
 
     Trial 0 is the nominal start (so the table also says how the controller
-    does as evolved); the other trials are drawn from ``round_rng(seed, 0)``.
+    does as evolved); the other trials are drawn from ``trial_rng(seed)``, a
+    stream no run's training starts come from.  ``sizes`` default: the figure's.
     """
+    sizes = sizes_for(type(task).figure) if sizes is None else sizes
     if not 1 <= trials <= 100_000:
         raise ValueError(f"trials must be in 1..100000, got {trials}")
     q0, qd0 = task.initial_state()
-    q0s, qd0s = perturbed_starts(task.fig, q0, qd0, trials, round_rng(seed, 0), sizes)
+    q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, trial_rng(seed), sizes)
     q0s[0], qd0s[0] = q0, qd0
-    traj = robust_rollout(task.fig, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
+    traj = robust_rollout(task.figure, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
@@ -198,3 +227,113 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
             "nominal_cost": float(costs[0]), "cost_min": q[0], "cost_q25": q[1], "cost_median": q[2],
             "cost_q75": q[3], "cost_max": q[4], "diverged": int(traj.diverged.sum()),
             "sizes": asdict(sizes), "costs": costs.tolist(), "success": ok.tolist()}
+
+
+# ---------------------------------------------------------------- a run's robust setting
+
+SIZE_KEYS = tuple(Perturbation.__dataclass_fields__)
+SETTING_KEYS = ("starts", "aggregate", *SIZE_KEYS)
+MAX_STARTS = 1000
+
+
+def normalize(robust: dict | None, task) -> dict:
+    """A run's ``robust`` setting checked and completed (the figure's default
+    sizes filled in), as config.json records it; {} when off.  Bad values: one
+    ConfigError line."""
+    if not robust:
+        return {}
+    from ..records import ConfigError, validate_number
+    unknown = sorted(set(robust) - set(SETTING_KEYS))
+    if unknown:
+        raise ConfigError(f"robust: unknown setting(s) {unknown}; known: {list(SETTING_KEYS)}")
+    out = {"starts": int(validate_number("--robust-starts", robust.get("starts", 1), lo=1,
+                                         hi=MAX_STARTS, integer=True)),
+           "aggregate": robust.get("aggregate", "mean")}
+    if out["aggregate"] not in AGGREGATES:
+        raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)}, "
+                         f"got {out['aggregate']!r}")
+    default = asdict(sizes_for(type(task).figure))
+    for k in SIZE_KEYS:
+        v = robust.get(k, default[k])
+        out[k] = float(validate_number(f"--perturb {k}", v, lo=0, hi=10.0))
+    return out
+
+
+def sizes_of(robust: dict) -> Perturbation:
+    return Perturbation(**{k: robust[k] for k in SIZE_KEYS})
+
+
+def batch_evaluation(ev, genomes, progress: float, generation: int):
+    """One generation's batch scored from ``ev.robust['starts']`` perturbed starts.
+
+    ``ev`` is an :class:`gpmotion.evaluate.InProcessEvaluator` whose ``robust``
+    holds a normalized setting plus the run's ``seed``.  The starts depend on
+    (seed, generation) only, so chunks on any backend and a resumed run see
+    the same ones.  Per controller: cost = the aggregate of its K costs;
+    success = it succeeds from every start; failed = some start diverged;
+    measures = those of the mean (``mean``: the mean over starts) or of the
+    worst start (``worst``), so a cost recomputed from them (the final-weights
+    column) agrees with the aggregate; extras (BSR senses) from its first start.
+    """
+    from ..evaluate import Evaluation
+    r, task, fam = ev.robust, ev.task, ev.family
+    k, n = r["starts"], len(genomes)
+    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
+                                 sizes_of(r))
+    traj = robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
+                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          actuation=ev.actuation, default_tau=fam.default_tau,
+                          record_senses=fam.needs_senses, threads=ev.threads)
+    costs, measures, ok = task.score(traj, progress)
+    agg = aggregate(costs, k, r["aggregate"])
+    if r["aggregate"] == "mean":
+        folded = {m: np.asarray(v, float).reshape(n, k).mean(axis=1) for m, v in measures.items()}
+    else:
+        c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
+        pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
+        folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
+    extras = None
+    if fam.needs_senses:
+        extras = [fam.normalized(traj.senses[e * k]) for e in range(n)]
+    return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
+                      traj.diverged.reshape(n, k).any(axis=1), folded, extras)
+
+
+# ---------------------------------------------------------------- gpmotion run options
+
+def add_run_arguments(p) -> None:
+    """``gpmotion run``'s robust-start options (an argument group)."""
+    g = p.add_argument_group("robust controllers (Auslander et al. §3: perturbed starts)")
+    g.add_argument("--robust-starts", type=int, metavar="K",
+                   help="score every controller from K randomly perturbed starts (joint angles, "
+                        "position, orientation, linear and angular momentum), redrawn every "
+                        "generation from the run's seed (default: off, the nominal start)")
+    g.add_argument("--robust-aggregate", choices=AGGREGATES,
+                   help="fold the K costs into one: mean (default) or worst")
+    g.add_argument("--perturb", metavar="PART=SIGMA,...",
+                   help="perturbation sizes (σ) overriding the figure's defaults: "
+                        + ", ".join(SIZE_KEYS) + " (rad, m, rad, m/s, rad/s); "
+                        "defaults per figure in docs/composite.md")
+
+
+def run_setting(args) -> dict:
+    """The ``robust`` entry of a RunConfig from parsed ``gpmotion run`` options (only what
+    was given; :func:`normalize` fills in the rest once the task is known)."""
+    from ..records import ConfigError, validate_number
+    out = {}
+    if getattr(args, "robust_starts", None) is not None:
+        out["starts"] = args.robust_starts
+    if getattr(args, "robust_aggregate", None) is not None:
+        out["aggregate"] = args.robust_aggregate
+    text = getattr(args, "perturb", None)
+    if text is not None:
+        for part in text.split(","):
+            k, eq, v = part.partition("=")
+            k = k.strip()
+            if not eq or k not in SIZE_KEYS:
+                raise ConfigError(f"--perturb expects PART=SIGMA with PART one of "
+                                  f"{', '.join(SIZE_KEYS)}, got {part.strip()!r}")
+            out[k] = float(validate_number(f"--perturb {k}", v.strip(), lo=0, hi=10.0))
+    if out and "starts" not in out:
+        raise ConfigError("--robust-aggregate / --perturb need --robust-starts K")
+    return out

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import asdict
 
 HELP = "success rate and cost spread of a controller from randomly perturbed starts"
 
@@ -17,23 +18,28 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", help="run directory or controller JSON (best.json)")
     p.add_argument("--trials", type=int, default=100, help="perturbed starts (default 100; trial 0 is nominal)")
     p.add_argument("--seed", type=int, default=0)
-    for name, default, unit in (("joint", 0.15, "rad"), ("position", 0.02, "m"), ("orientation", 0.1, "rad"),
-                                ("velocity", 0.1, "m/s"), ("angular", 0.3, "rad/s")):
-        p.add_argument(f"--{name}", type=float, default=default, help=f"σ of the {name} perturbation ({unit}, default {default})")
+    for name, unit in (("joint", "rad"), ("position", "m"), ("orientation", "rad"), ("velocity", "m/s"),
+                       ("angular", "rad/s")):
+        p.add_argument(f"--{name}", type=float, help=f"σ of the {name} perturbation ({unit}; default: "
+                       "the figure's, docs/composite.md)")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--plot", metavar="PNG", help="also draw the cost of every trial, successes marked")
 
 
 def run_command(args) -> int:
     from ..replay import load_controller
-    from .robust import Perturbation, robustness
+    from .robust import SIZE_KEYS, Perturbation, robustness, sizes_for
     task, family, actuation, genome, _ = load_controller(args.source)
-    sizes = Perturbation(args.joint, args.position, args.orientation, args.velocity, args.angular)
+    given = {k: getattr(args, k) for k in SIZE_KEYS if getattr(args, k) is not None}
+    sizes = Perturbation(**{**asdict(sizes_for(type(task).figure)), **given})
     r = robustness(task, family, actuation, genome, trials=args.trials, seed=args.seed, sizes=sizes)
     if args.json:
         print(json.dumps(r))
     else:
-        print(f"{args.source}: {task.name}, {family.name}, {r['trials']} starts (seed {r['seed']})")
+        sz = r["sizes"]
+        print(f"{args.source}: {task.name}, {family.name}, {r['trials']} starts (seed {r['seed']}); "
+              f"σ joint {sz['joint']:g} rad, position {sz['position']:g} m, orientation "
+              f"{sz['orientation']:g} rad, velocity {sz['velocity']:g} m/s, angular {sz['angular']:g} rad/s")
         print("| success | nominal | cost min | q25 | median | q75 | max | diverged |")
         print("|---|---|---|---|---|---|---|---|")
         print(f"| {100 * r['success_rate']:.0f}% | {'ok' if r['nominal_success'] else 'fails'} "

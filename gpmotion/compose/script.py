@@ -339,12 +339,13 @@ def bind(script: Script, figure) -> None:
 
 # ----------------------------------------------------------------- evaluation
 
-def evaluate(script: Script, traj, bounds) -> dict[str, np.ndarray]:
+def evaluate(script: Script, traj, bounds, scenes=None) -> dict[str, np.ndarray]:
     """Every phase credit and ``total`` [E] of a (composite) trajectory.
 
     ``bounds`` int[E, P + 1]: frame of each switch, ``bounds[:, 0] = 0`` and
     ``bounds[:, P]`` the last frame; phase k spans frames bounds[:, k]..bounds[:, k + 1].
     A non-finite total (0/0, √−1, a diverged episode) becomes −inf: the worst.
+    ``scenes``: each phase's Scene (a composite's; goals are the phase's), default the trajectory's.
     """
     ctx = Context(traj)
     bounds = np.asarray(bounds, dtype=np.int64)
@@ -359,7 +360,7 @@ def evaluate(script: Script, traj, bounds) -> dict[str, np.ndarray]:
     k = 0
     for s in script.statements:
         if s.is_phase:
-            win = Window(bounds[:, k], bounds[:, k + 1], F)
+            win = Window(bounds[:, k], bounds[:, k + 1], F, None if scenes is None else scenes[k])
             values[s.name] = _per_episode(_eval(s.expr, ctx, win, values, macros), E)
             k += 1
     out = {name: values[name] for name in script.phases}

@@ -1,6 +1,12 @@
-"""Figure registry: shipped TOML specs by name, user specs by path or dict."""
+"""Figure registry: shipped TOML specs by name, user specs by path or dict.
+
+Compiled figures are cached by name or path, and every caller gets its own
+deep copy: a Figure holds mutable arrays (its Model, ``q_default``...), and
+one task changing its copy must not change every other task's figure.
+"""
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 from ..model import Figure
@@ -13,10 +19,16 @@ _CACHE: dict[str, Figure] = {}
 
 
 def register_figure(name: str, spec: dict | str | Path) -> None:
-    """Register a figure spec (dict or TOML path) under ``name``."""
-    if name in _REGISTRY:
-        raise ValueError(f"figure {name!r} is already registered ({_REGISTRY[name]})")
-    _REGISTRY[name] = spec if isinstance(spec, dict) else Path(spec)
+    """Register a figure spec (dict or TOML path) under ``name``; registering
+    the same TOML file again is harmless, another spec under a taken name is an error."""
+    new = spec if isinstance(spec, dict) else Path(spec).resolve()
+    old = _REGISTRY.get(name)
+    if old is not None:
+        if isinstance(old, Path) and old.resolve() == new:
+            return
+        raise ValueError(f"figure {name!r} is already registered ({old if isinstance(old, Path) else 'a spec dict'}); "
+                         f"{new if isinstance(new, Path) else 'a spec dict'} needs another name")
+    _REGISTRY[name] = new
 
 
 def figure_names() -> list[str]:
@@ -47,7 +59,7 @@ def load_figure(name_or_spec) -> Figure:
         return compile_spec(resolve_spec(name_or_spec))
     key = str(name_or_spec)
     if key in _CACHE:
-        return _CACHE[key]
+        return copy.deepcopy(_CACHE[key])
     if key in _REGISTRY:
         src = _REGISTRY[key]
         fig = compile_spec(resolve_spec(src if isinstance(src, dict) else load_spec(src), (key,)))
@@ -57,7 +69,7 @@ def load_figure(name_or_spec) -> Figure:
         from ..names import unknown
         raise SpecError(unknown("figure", key, figure_names()))
     _CACHE[key] = fig
-    return fig
+    return copy.deepcopy(fig)
 
 
 __all__ = ["SpecError", "compile_spec", "compile_spec3d", "load_spec", "load_figure", "merge_spec",

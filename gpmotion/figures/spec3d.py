@@ -149,6 +149,9 @@ def _joint3d(j, bodies, i):
         if j[k] not in bodies:
             raise SpecError(f"{where}: unknown {k} body {j[k]!r}")
     jt = j.get("type", "hinge")
+    if jt == "fixed":   # welded: the child rides on the parent's link (no dof)
+        return dict(name=j["name"], parent=j["parent"], child=j["child"], dofs=[],
+                    offset=_vec(j, "offset", where, 3, default=[0.0, 0.0, 0.0]), rot=_rotation(j, where))
     if jt in ("hinge", "slide"):
         axes = [_unit(_vec(j, "axis", where, 3), where, "axis")]
         names = [j["name"]]
@@ -169,7 +172,7 @@ def _joint3d(j, bodies, i):
             raise SpecError(f"{where}: 'axes' repeats an axis name; give axis vectors instead")
         kinds = [HINGE3D] * len(axes)
     else:
-        raise SpecError(f"{where}: unknown joint type {jt!r} (hinge, slide, euler)")
+        raise SpecError(f"{where}: unknown joint type {jt!r} (hinge, slide, euler, fixed)")
     k = len(axes)
     lim = j.get("limits", [-math.pi, math.pi])
     if isinstance(lim, list) and lim and all(isinstance(x, list) for x in lim):
@@ -208,6 +211,16 @@ def _joint3d(j, bodies, i):
 
 
 GIMBAL_MARGIN_DEG = 5.0
+
+
+def _combine(m1, c1, I1, m2, c2, I2):
+    """Mass, com and inertia about the com of two rigid bodies welded together."""
+    if m1 == 0.0:
+        return m2, c2, I2
+    m = m1 + m2
+    c = (m1 * c1 + m2 * c2) / m
+    shift = lambda mm, d: mm * (d @ d * np.eye(3) - np.outer(d, d))  # noqa: E731 parallel axis
+    return m, c, I1 + shift(m1, c1 - c) + I2 + shift(m2, c2 - c)
 
 
 def _check_gimbal(axes, lims, where):
@@ -298,9 +311,14 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         body_link[root_body] = 2
     else:
         body_link[root_body] = -1
+    in_link = {}   # body -> (R, t): its frame in its link's frame (fixed joints)
     for j in ordered:
         p = body_link[j["parent"]]
-        xrot, xpos = j["rot"], j["offset"]
+        Rb, tb = in_link.get(j["parent"], (eye, np.zeros(3)))
+        xrot, xpos = Rb @ j["rot"], tb + Rb @ j["offset"]
+        if not j["dofs"]:
+            in_link[j["child"]], body_link[j["child"]] = (xrot, xpos), p
+            continue
         if p == -1:  # hangs from a fixed root: fold the placement into the joint frame
             xrot, xpos = Rroot @ xrot, pos + Rroot @ xpos
         nd = len(j["dofs"])
@@ -322,10 +340,12 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     mass = np.zeros(nl)
     com = np.zeros((nl, 3))
     icom = np.zeros((nl, 3, 3))
-    for i, L in enumerate(links):
-        if L["body"] is not None:
-            b = bodies[L["body"]]
-            mass[i], com[i], icom[i] = b["mass"], b["com"], b["inertia"]
+    for bname, b in bodies.items():       # welded bodies add up on their link
+        i = body_link[bname]
+        if i >= 0:
+            Rb, tb = in_link.get(bname, (eye, np.zeros(3)))
+            mass[i], com[i], icom[i] = _combine(mass[i], com[i], icom[i], b["mass"],
+                                                tb + Rb @ b["com"], Rb @ b["inertia"] @ Rb.T)
     lo, hi, damping = np.full(nv, -np.inf), np.full(nv, np.inf), np.zeros(nv)
     act = []
     for i, L in enumerate(links):
@@ -334,8 +354,12 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
             lo[dadr[i]], hi[dadr[i]], damping[dadr[i]] = d["lo"], d["hi"], d["damping"]
             if d["actuated"]:
                 act.append((i, d))
-    contacts = _points3d(spec.get("contacts", []), "contact", bodies)
-    sites = _points3d(spec.get("sites", []), "site", bodies)
+    def at(body, x):           # a body-frame point in its link's frame
+        Rb, tb = in_link.get(body, (eye, np.zeros(3)))
+        return tb + Rb @ x
+
+    contacts = [(n, b, at(b, x), s) for n, b, x, s in _points3d(spec.get("contacts", []), "contact", bodies)]
+    sites = [(n, b, at(b, x), s) for n, b, x, s in _points3d(spec.get("sites", []), "site", bodies)]
     seg_bodies = list(bodies)
     total_mass = sum(b["mass"] for b in bodies.values() if body_link[b["name"]] >= 0)
     actuator_names = [d["name"] for _, d in act]
@@ -364,8 +388,8 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         ss_link=np.array([body_link[s[1]] for s in sensed], dtype=np.int64),
         ss_pos=np.array([s[2] for s in sensed], dtype=np.float64).reshape(-1, 3),
         seg_link=np.array([body_link[b] for b in seg_bodies], dtype=np.int64),
-        seg_a=np.array([bodies[b]["seg"][0] for b in seg_bodies]).reshape(-1, 3),
-        seg_b=np.array([bodies[b]["seg"][1] for b in seg_bodies]).reshape(-1, 3),
+        seg_a=np.array([at(b, bodies[b]["seg"][0]) for b in seg_bodies]).reshape(-1, 3),
+        seg_b=np.array([at(b, bodies[b]["seg"][1]) for b in seg_bodies]).reshape(-1, 3),
         seg_r=np.array([bodies[b]["radius"] for b in seg_bodies], dtype=np.float64),
         fixed_rot=np.ascontiguousarray(Rroot, dtype=np.float64), fixed_pos=pos.copy(),
         base_link=body_link[root_body],

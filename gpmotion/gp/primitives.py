@@ -1,8 +1,11 @@
 """Registry of GP primitives: one small plugin file declares each one.
 
-Why a registry: the GP interpreter is *generated* from whatever is registered
-(see :mod:`gpmotion.gp.interpreter`), so adding a primitive is one file in
-``primitives/`` (or in a user's ``--plugins DIR``) and no edit to a kernel.
+Why a registry: the GP interpreter is *generated* from the primitives a
+primitive set names (see :mod:`gpmotion.gp.interpreter`), so adding a
+primitive is one file in ``primitives/`` (or in a user's ``--plugins DIR``)
+and no edit to a kernel.  Registering a primitive puts it in no set: a task
+names its set (``Task.primitives``, default :data:`STANDARD`) and a run may
+name another (``--primitives``), so a new primitive changes no existing run.
 
 A primitive is pure scalar, numba-compatible code declared at module level::
 
@@ -36,26 +39,27 @@ The interpreter then evaluates only the branch taken (jumps over the
 others in the bytecode), so an untaken branch costs nothing.  It finds the
 branch by calling the function with the branch arguments replaced by their
 indices 0.0, 1.0, ...; :func:`register` checks the selector rule on sample
-values.  ``default=False`` keeps a primitive out of the default set (a task
-or preset must name it).
+values.
 """
 from __future__ import annotations
 
 import ast
 import importlib
-import importlib.util
 import inspect
 import keyword
 import math
-import sys
 import textwrap
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from gpmotion.cache import digest
-
 CLAMP = 1e6  # magnitude cap of every interpreter value (documented above)
+
+# The standard GP function set, in opcode order: every shipped primitive but
+# the paper's ``ifpos`` (sorted, as the default set was when it was "every
+# registered primitive", so runs recorded then replay and resume unchanged).
+STANDARD = ("abs", "add", "cos", "div", "iflte", "mul", "sin", "sub")
 
 
 def clamp(v: float) -> float:
@@ -77,7 +81,6 @@ class Primitive:
     imports: str         # module-level import lines of the plugin file
     file: str
     select: tuple[int, ...] = ()   # selector argument positions; () = not a conditional
-    default: bool = True           # in the default primitive set
 
     @property
     def copy_name(self) -> str:
@@ -180,10 +183,14 @@ def _check_selector(prim: Primitive) -> None:
 
 
 def register(name: str, func: Callable, arity: int, symbol: str | None = None, *,
-             select=None, default: bool = True) -> Primitive:
+             select=None, default=None) -> Primitive:
     """Register ``func`` as primitive ``name``; a duplicate from another file is an error.
 
-    ``select``: see the module doc (conditionals); ``default``: in the default set."""
+    ``select``: see the module doc (conditionals).  ``default`` is deprecated
+    and has no effect: no primitive joins a set by being registered."""
+    if default is not None:
+        warnings.warn(f"primitive {name!r}: default= is deprecated and has no effect (a task "
+                      "names its primitive set: Task.primitives)", DeprecationWarning, stacklevel=3)
     if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
         raise ValueError(f"primitive name {name!r} must be a Python identifier")
     if not isinstance(arity, int) or not 1 <= arity <= MAX_ARITY:
@@ -198,7 +205,7 @@ def register(name: str, func: Callable, arity: int, symbol: str | None = None, *
                          f"and in {file}")
     source, imports = _copy_source(name, func)
     prim = Primitive(name, arity, symbol or name, func, source, imports, file,
-                     _select_positions(name, select, arity), bool(default))
+                     _select_positions(name, select, arity))
     if prim.conditional:
         _check_selector(prim)
     _REGISTRY[name] = prim
@@ -206,18 +213,13 @@ def register(name: str, func: Callable, arity: int, symbol: str | None = None, *
 
 
 def primitive(name: str, arity: int, symbol: str | None = None, *, select=None,
-              default: bool = True):
+              default=None):
     """Decorator form of :func:`register`; returns the function unchanged."""
     def deco(func):
         prim = register(name, func, arity, symbol, select=select, default=default)
         func.__gpmotion_primitive__ = prim
         return func
     return deco
-
-
-def unregister(name: str) -> None:
-    """Remove a primitive (tests and interactive sessions)."""
-    _REGISTRY.pop(name, None)
 
 
 def get(name: str) -> Primitive:
@@ -236,11 +238,6 @@ def names() -> list[str]:
     return sorted(_REGISTRY)
 
 
-def default_names() -> list[str]:
-    """The default primitive set: registered names without ``default=False``."""
-    return [n for n in names() if _REGISTRY[n].default]
-
-
 def load_builtin() -> None:
     """Import every module of the installed ``gpmotion.primitives`` package."""
     import pkgutil
@@ -248,31 +245,3 @@ def load_builtin() -> None:
     for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda i: i.name):
         if not info.name.startswith("_"):
             importlib.import_module(f"{_BUILTIN_PACKAGE}.{info.name}")
-
-
-def load_plugins(folder: str | Path) -> list[str]:
-    """Import every ``*.py`` file in ``folder``; return names newly registered."""
-    folder = Path(folder).resolve()
-    if not folder.is_dir():
-        raise ValueError(f"plugin folder not found: {folder}")
-    before = set(_REGISTRY)
-    builtin = importlib.import_module(_BUILTIN_PACKAGE)
-    if any(Path(p).resolve() == folder for p in builtin.__path__):
-        load_builtin()
-    else:
-        tag = digest(str(folder))
-        for path in sorted(folder.glob("*.py")):
-            if path.name.startswith("_"):
-                continue
-            modname = f"gpmotion_plugin_{tag}_{path.stem}"
-            if modname in sys.modules:
-                continue
-            spec = importlib.util.spec_from_file_location(modname, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[modname] = module
-            try:
-                spec.loader.exec_module(module)
-            except Exception:
-                del sys.modules[modname]
-                raise
-    return sorted(set(_REGISTRY) - before)

@@ -41,10 +41,6 @@ class PsetInfo:
     def primitives(self) -> list[registry.Primitive]:
         return [registry.get(n) for n in self.primitive_names]
 
-    @property
-    def erc_class(self):
-        return self.pset.mapping[self.erc_name]
-
 
 def _clamped(func: Callable) -> Callable:
     @functools.wraps(func)
@@ -68,15 +64,15 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
                *, sense_names: Sequence[str] | None = None,
                erc_range: tuple[float, float] = (-1.0, 1.0), name: str = "MAIN",
                flag_names: Sequence[str] = ()) -> PsetInfo:
-    """Primitive set over ``primitive_names`` (default: every registered primitive
-    not declared ``default=False``) and terminals.
+    """Primitive set over ``primitive_names`` in that order (opcode order;
+    default :data:`gpmotion.gp.primitives.STANDARD`) and terminals.
 
     ``sense_names`` is the full raw sense vector layout (``Figure.sense_names``);
     when omitted, terminal k reads ``senses[k]``.  ``flag_names``: subgoal
     terminals appended after the senses (gpmotion.gp.subgoals).
     """
     registry.load_builtin()
-    prim_names = tuple(registry.default_names() if primitive_names is None else primitive_names)
+    prim_names = tuple(registry.STANDARD if primitive_names is None else primitive_names)
     for n in prim_names:
         registry.get(n)                       # clear error for unknown names
     if len(set(prim_names)) != len(prim_names):

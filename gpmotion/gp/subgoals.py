@@ -53,9 +53,9 @@ def task_subgoals(task) -> tuple[Subgoal, ...]:
     if len(set(names)) != len(names):
         raise ValueError(f"task {task.name}: repeated subgoal names {names}")
     for g in goals:
-        if g.name in task.fig.sense_names:
+        if g.name in task.figure.sense_names:
             raise ValueError(f"task {task.name}: subgoal {g.name!r} has a sense's name")
-        task.fig.sense_index(g.sense)              # raises on an unknown sense
+        task.figure.sense_index(g.sense)              # raises on an unknown sense
     return goals
 
 

@@ -248,7 +248,8 @@ class SerialAdapter(_Adapter):
             raise ValueError(f"phase_steps must be an integer >= 1, got {self.phase_steps!r}")
         self.family = family
         task = family.task
-        self.search = SerialSearch(family.random, family.mutate, rng=np.random.default_rng(seed),
+        search = getattr(family, "serial_search", SerialSearch)    # 3-D bsr-sense: enriched start
+        self.search = search(family.random, family.mutate, rng=np.random.default_rng(seed),
                                    maximize=False, genome_to_json=family.to_json,
                                    genome_from_json=family.from_json,
                                    phase_fn=lambda g: task.phase(self.progress_of(g)), **opts)

@@ -1,0 +1,182 @@
+"""Issue 17's bars: Auslander et al.'s 3-D creatures (Cujo, Rex, Bob) with BSR and GP.
+
+    python benchmarks/creatures_3d.py rates TASK [--families bsr-time,bsr-sense,gp]
+                                      [--seeds 5] [--budget N] [--out DIR]
+    python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--out DIR]
+    python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
+    python benchmarks/creatures_3d.py mujoco [--quick]
+
+* ``rates``: ``gpmotion compare`` on a creature task with the families'
+  creature settings (``FAMILY_OPTIONS``: time-based BSR with the paper's
+  R = 4 rules and R − 1 free dividers of t_per; sense-based with 10 rules)
+  and kinematic joints for every family (the paper's simulator; GP's
+  targets then follow the τ law with τ = 0.1 s).  Writes compare.md (the
+  rates), curves.png (the learning curves, as the paper's Figs. 7 and 8)
+  and best/*.json.
+* ``sequence``: Rex walks, then turns from the walk's final state, then
+  walks again from the turn's (three searches solved seriatim, each stage's
+  task started by ``after=`` the earlier stages' controllers), then the
+  three controllers run as one composite (gpmotion.compose, state carried
+  across each switch); prints each stage's numbers and whether the whole
+  sequence completes (walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m, never fallen).
+* ``speed``: one time-based Rex walk search until its first acceptable
+  controller (``rex_walk`` solved: ≥ 1 m without falling); wall and CPU
+  seconds and evaluations.
+* ``mujoco``: the 3-D kernel against MuJoCo's C rollout on each creature
+  (``benchmarks/compare_mujoco.py --only creatures``).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ACTUATION = "kinematic"
+FAMILY_OPTIONS = {
+    "cujo_travel": {"bsr-time": {"rules": 4, "segments": "variable", "t_per": 0.6}},
+    "rex_walk": {"bsr-time": {"rules": 4, "segments": "variable", "t_per": 1.0}},
+    "rex_turn": {"bsr-time": {"rules": 4, "segments": "variable", "t_per": 1.0}},
+    "bob_walk": {"bsr-time": {"rules": 4, "segments": "variable", "t_per": 1.0}},
+}
+SENSE_OPTIONS = {"rules": 10}
+GP_OPTIONS = {"tau": 0.1}
+
+
+def options(task: str) -> dict:
+    return {"bsr-sense": SENSE_OPTIONS, "gp": GP_OPTIONS, **FAMILY_OPTIONS.get(task, {})}
+
+
+def rates(a) -> int:
+    from gpmotion.compare import compare
+    fams = a.families.split(",")
+    params = dict(kv.split("=", 1) for kv in a.param)
+    _, md = compare(a.task, fams, a.seeds, a.budget, Path(a.out or f"runs/creatures-{a.task}"),
+                    actuation=ACTUATION, params=params, population=a.population,
+                    family_options=options(a.task), force=True, quiet=a.quiet)
+    print(md)
+    return 0
+
+
+def search(task, family: str, seed: int, budget: int, stop_on_success=False):
+    """One search (the compare loop); returns (best genome, family, facts)."""
+    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.families import make_family
+    from gpmotion.replay import replay_genome
+    from gpmotion.search.adapters import make_search
+    from gpmotion.compare import _search_opts
+    fam = make_family(family, task, **options(task.name).get(family, {}))
+    s = make_search(fam, seed, **_search_opts(family, budget, 100, task))
+    ev = InProcessEvaluator(task, fam, actuation=ACTUATION)
+    evals, first, t0, c0 = 0, None, time.perf_counter(), time.process_time()
+    while not s.done and evals < budget:
+        g = s.ask()
+        r = ev.evaluate(g, s.progress)
+        s.tell(r)
+        evals += len(g)
+        if first is None and r.success.any():
+            first = (evals, time.perf_counter() - t0, time.process_time() - c0)
+            if stop_on_success:
+                best = g[int(np.flatnonzero(r.success)[0])]
+                break
+    else:
+        best = s.best
+    traj, costs, measures, ok = replay_genome(task, fam, ACTUATION, best)
+    facts = {"evaluations": evals, "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
+             "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
+             "describe": task.describe(traj, measures)}
+    return best, fam, facts
+
+
+def sequence(a) -> int:
+    import gpmotion
+    from gpmotion.compose import composite
+    from gpmotion.controller_file import save_controller
+    out = Path(a.out or "runs/creatures-sequence")
+    out.mkdir(parents=True, exist_ok=True)
+    stages = [("walk", "rex_walk", ""), ("turn", "rex_turn", "walk"), ("walk2", "rex_walk", "walk,turn")]
+    paths, report = {}, {}
+    for name, task_name, after in stages:
+        prior = ",".join(str(paths[p]) for p in after.split(",") if p)
+        task = gpmotion.get_task(task_name, after=prior)
+        best, fam, facts = search(task, "bsr-time", a.seed, a.budget)
+        paths[name] = out / f"{name}.json"
+        save_controller(paths[name], task, best, family=fam, actuation=ACTUATION, seed=a.seed)
+        report[name] = facts
+        print(f"{name}: {facts['describe'][0]}  ({facts['evaluations']} evaluations, "
+              f"{facts['wall_s']:.0f} s)", flush=True)
+    comp = composite.from_controllers([paths[n] for n, _, _ in stages], names=[n for n, _, _ in stages])
+    traj, bounds = composite.run(comp)
+    from gpmotion.tasks._creature3d import creature_measures
+    from gpmotion.tasks.rex_walk import FEET
+    parts = []
+    for k, (name, _, _) in enumerate(stages):
+        lo, hi = int(bounds[0, k]), int(bounds[0, k + 1])
+        piece = traj.episode(0)
+        from dataclasses import replace
+        sl = slice(lo, hi + 1)
+        piece = replace(piece, q=piece.q[:, sl], qd=piece.qd[:, sl], com=piece.com[:, sl],
+                        contact_force=piece.contact_force[:, sl], times=piece.times[sl])
+        parts.append(creature_measures(piece, FEET))
+    done = (parts[0]["distance"][0] >= 1.0 and parts[1]["turn"][0] >= np.radians(45)
+            and parts[2]["distance"][0] >= 1.0 and not any(p["fall"][0] > 0 for p in parts))
+    report["composite"] = {"walk_m": float(parts[0]["distance"][0]),
+                           "turn_deg": float(np.degrees(parts[1]["turn"][0])),
+                           "walk2_m": float(parts[2]["distance"][0]),
+                           "fell": [bool(p["fall"][0] > 0) for p in parts], "completes": bool(done)}
+    print(json.dumps(report["composite"]))
+    (out / "sequence.json").write_text(json.dumps(report, indent=2, default=str))
+    return 0
+
+
+def speed(a) -> int:
+    import gpmotion
+    task = gpmotion.get_task("rex_walk")
+    _, _, f = search(task, "bsr-time", a.seed, a.budget, stop_on_success=True)
+    if f["first_success"] is None:
+        print(f"no acceptable Rex walk in {f['evaluations']} evaluations ({f['wall_s']:.0f} s wall, "
+              f"{f['cpu_s']:.0f} s CPU)")
+    else:
+        n, wall, cpu = f["first_success"]
+        print(f"first acceptable Rex walk (≥ 1 m, never fallen) after {n} evaluations: "
+              f"{wall:.0f} s wall, {cpu:.0f} s CPU ({cpu / n * 1e3:.1f} ms CPU per 3 s evaluation); "
+              f"bar ≤ 300 s: {'met' if wall <= 300 else 'NOT met'}")
+    return 0
+
+
+def mujoco(a) -> int:
+    sys.path.insert(0, str(Path(__file__).parent))
+    import compare_mujoco
+    return compare_mujoco.main(["--only", "creatures"] + (["--quick"] if a.quick else []))
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("rates")
+    r.add_argument("task")
+    r.add_argument("--families", default="bsr-time,bsr-sense,gp")
+    r.add_argument("--seeds", type=int, default=5)
+    r.add_argument("--budget", type=int, default=3000)
+    r.add_argument("--population", type=int, default=100)
+    r.add_argument("--param", action="append", default=[], help="task parameter KEY=VALUE")
+    r.add_argument("--out")
+    r.add_argument("--quiet", action="store_true")
+    s = sub.add_parser("sequence")
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--budget", type=int, default=3000)
+    s.add_argument("--out")
+    v = sub.add_parser("speed")
+    v.add_argument("--seed", type=int, default=0)
+    v.add_argument("--budget", type=int, default=10000)
+    m = sub.add_parser("mujoco")
+    m.add_argument("--quick", action="store_true")
+    a = p.parse_args(argv)
+    return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco}[a.cmd](a)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,116 @@
+"""Success rates of the Herman tasks on their defaults: `gpmotion run TASK --seed S`.
+
+Issue 18's bar: at least 4 of 5 seeds solve every Herman task and preset,
+each run in at most 90 s on the 2-core machine; success is judged on a
+motion that has come to rest (tasks/_herman.py: REST_SPEED, SETTLE).
+
+Each run is one line of ``--out`` (JSON lines: config, seed, success, wall
+time, CPU time, the load average when it started, the best controller's
+facts).  On a loaded machine the wall time says little; the CPU time (the
+process's user + system seconds, numba's threads included) over the 2
+cores is what the run would take on a quiet one, at best.  A
+killed benchmark resumes where it stopped (runs already in the file are
+skipped).  The table at the end is built from the file.
+
+    python benchmarks/herman_success.py [--seeds 5] [--only touch_nose,point] [--out F]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from gpmotion.records import read_json
+from gpmotion.run import RunConfig, run
+
+# name -> (task, params): every Herman task and preset of issue 18's bar
+CONFIGS = {
+    "touch_nose": ("herman_touch_nose", {}),
+    "touch_object/0": ("herman_touch_object", {"target": 0}),
+    "touch_object/1": ("herman_touch_object", {"target": 1}),
+    "touch_object/2": ("herman_touch_object", {"target": 2}),
+    "point": ("herman_point", {}),
+    "wave": ("herman_wave", {}),
+    "reach_standing": ("herman_reach_standing", {}),
+}
+EXTRA = {   # not in the bar; --only names them
+    "touch/knee_l": ("herman_touch", {"site": "knee_l"}),
+    "touch/elbow_l": ("herman_touch", {"site": "elbow_l"}),
+}
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def run_one(name: str, seed: int, tmp: str | None = None) -> dict:
+    task, params = {**CONFIGS, **EXTRA}[name]
+    load = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory(dir=tmp) as d:
+        out = Path(d) / "run"
+        t0, c0 = time.perf_counter(), _cpu()
+        run(RunConfig(task=task, seed=seed, params=params), out, quiet=True, artifacts=False)
+        wall, cpu = time.perf_counter() - t0, _cpu() - c0
+        best = read_json(out / "best.json", kind="best")
+    return {"config": name, "seed": seed, "success": bool(best["success"]),
+            "wall_s": round(wall, 1), "cpu_s": round(cpu, 1), "load": round(load, 1),
+            "final_cost": round(best["final_cost"], 4), "facts": best.get("facts", [])}
+
+
+def done(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def table(rows: list[dict], names) -> str:
+    lines = ["| task | solved | slowest run, wall (s) | most CPU (s) | load average at the runs' start |",
+             "|---|---|---|---|---|"]
+    for n in names:
+        rs = [r for r in rows if r["config"] == n]
+        if rs:
+            lines.append(f"| {n} | {sum(r['success'] for r in rs)} / {len(rs)} | "
+                         f"{max(r['wall_s'] for r in rs):.0f} | "
+                         f"{max((r.get('cpu_s', float('nan')) for r in rs)):.0f} | "
+                         f"{min(r['load'] for r in rs):.1f}–{max(r['load'] for r in rs):.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--only", default="", help="comma list of: " + ", ".join({**CONFIGS, **EXTRA}))
+    ap.add_argument("--out", default="herman_success.jsonl", help="results, one run a line (resumable)")
+    args = ap.parse_args(argv)
+    names = [n for n in args.only.split(",") if n] or list(CONFIGS)
+    bad = [n for n in names if n not in {**CONFIGS, **EXTRA}]
+    if bad:
+        print(f"herman_success: unknown config(s) {bad}; known: {', '.join({**CONFIGS, **EXTRA})}",
+              file=sys.stderr)
+        return 2
+    path = Path(args.out)
+    have = {(r["config"], r["seed"]) for r in done(path)}
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        for n in names:
+            if (n, seed) in have:
+                continue
+            r = run_one(n, seed)
+            with path.open("a") as f:
+                f.write(json.dumps(r) + "\n")
+            print(f"{n} seed {seed}: {'solved' if r['success'] else 'NOT solved'} in "
+                  f"{r['wall_s']:.0f} s (load {r['load']}); {'; '.join(r['facts'])}",
+                  file=sys.stderr, flush=True)
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    print(table([r for r in done(path) if r["seed"] in seeds], names))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,101 @@
+"""Issue 16's robustness bar: controllers evolved with perturbed starts against
+controllers evolved without, each judged from 100 perturbed starts.
+
+For every seed: one run from the nominal start and one with ``--robust-starts
+K`` (otherwise the same settings), then ``gpmotion robustness RUN --trials
+100`` on both (the same 100 starts for every controller: trial 0 nominal,
+the others from the figure's default sizes, a stream no run trains on).
+Runs go one after another into ``--out`` and are reused (or resumed) when the
+script is started again.  Prints a markdown table and a summary line.
+
+    python benchmarks/robust_bar.py --task lamp_hop --seeds 5 --starts 8 \
+        --search stop_on_success=true
+    python benchmarks/robust_bar.py --task starman_travel --controller bsr-time \
+        --param seconds=2 --search n_generations=300 --seeds 5 --starts 4
+"""
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from gpmotion.compose.robust import robustness
+from gpmotion.replay import load_controller
+from gpmotion.run import RunConfig, run
+
+
+def _pairs(items, what):
+    out = {}
+    for it in items or []:
+        k, eq, v = it.partition("=")
+        if not eq:
+            sys.exit(f"{what} expects KEY=VALUE, got {it!r}")
+        out[k] = json.loads(v) if v in ("true", "false") or v.lstrip("-").replace(".", "", 1).isdigit() else v
+    return out
+
+
+def one_run(cfg: RunConfig, out: Path) -> float:
+    """Run (or finish) one run; seconds spent now (0 when it was done already)."""
+    if (out / "best.json").exists():
+        return 0.0
+    t0 = time.perf_counter()
+    if (out / "config.json").exists():
+        run(None, out, resume=True, quiet=True, artifacts=False)
+    else:
+        run(cfg, out, quiet=True, artifacts=False, force=True)
+    return time.perf_counter() - t0
+
+
+def judge(out: Path, trials: int) -> dict:
+    task, family, actuation, genome, _ = load_controller(str(out))
+    r = robustness(task, family, actuation, genome, trials=trials, seed=0)
+    return {k: r[k] for k in ("success_rate", "nominal_success", "nominal_cost", "cost_median")}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--task", default="lamp_hop")
+    ap.add_argument("--controller", default="gp")
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--starts", type=int, default=8, help="K perturbed starts per controller")
+    ap.add_argument("--aggregate", default="mean", choices=["mean", "worst"])
+    ap.add_argument("--trials", type=int, default=100)
+    ap.add_argument("--param", action="append", metavar="KEY=VALUE", help="task parameter")
+    ap.add_argument("--search", action="append", metavar="KEY=VALUE", help="search setting (both runs)")
+    ap.add_argument("--out", default="/tmp/robust_bar")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
+    base = Path(a.out) / f"{a.task}-{a.controller}"
+    rows = []
+    for seed in range(a.first_seed, a.first_seed + a.seeds):
+        row = {"seed": seed}
+        for kind, robust in (("nominal", {}), ("robust", {"starts": a.starts, "aggregate": a.aggregate})):
+            out = base / f"{kind}-seed{seed}"
+            cfg = RunConfig(task=a.task, family=a.controller, seed=seed, params=dict(params),
+                            search=dict(search), robust=robust)
+            row[f"{kind}_wall_s"] = round(one_run(cfg, out), 1)
+            row[kind] = judge(out, a.trials)
+        rows.append(row)
+        print(json.dumps(row), file=sys.stderr, flush=True)
+    if a.json:
+        print(json.dumps(rows))
+        return 0
+    print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}) vs nominal; "
+          f"success from {a.trials} perturbed starts (trial 0 nominal)")
+    print("| seed | evolved nominally: success | nominal start | evolved robust: success | nominal start |")
+    print("|---|---|---|---|---|")
+    for r in rows:
+        n, b = r["nominal"], r["robust"]
+        print(f"| {r['seed']} | {100 * n['success_rate']:.0f} % | {'ok' if n['nominal_success'] else 'fails'} "
+              f"| {100 * b['success_rate']:.0f} % | {'ok' if b['nominal_success'] else 'fails'} |")
+    for kind in ("nominal", "robust"):
+        s = sorted(r[kind]["success_rate"] for r in rows)
+        print(f"{kind}: median {100 * s[len(s) // 2]:.0f} %, mean {100 * sum(s) / len(s):.0f} %, "
+              f"≥ 80 %: {sum(x >= 0.8 for x in s)} of {len(s)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

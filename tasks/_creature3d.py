@@ -1,0 +1,104 @@
+"""Shared pieces of the 3-D creature tasks (Auslander et al. §4): Cujo, Rex, Bob.
+
+A creature task measures in the frame the episode starts in (heading of the
+root body at frame 0), so a stage that starts from another stage's final
+state (``after``) is scored along its own start heading.  Terms (raw values;
+each task weights them):
+
+* ``distance``      com displacement along the start heading (m)
+* ``sideways``      |com displacement across it| at the end (m)
+* ``fall``          fraction of the episode spent fallen (gpmotion.bsr.secondary3d)
+* ``rotation``      |net rotation about the vertical| (rad)
+* ``feet_forward``  mean forward displacement of the feet (m)
+* ``turn``          |change of heading| (rad)
+* ``steps``         forward steps before the first fall (bipeds)
+
+``after``: a comma-separated list of saved controller files (best.json of
+earlier stages); the episode starts from the final state of running them in
+series from the standing start (gpmotion.compose carries the state across
+each switch), as Rex learns to turn "given the final state of that walk".
+
+This module starts with ``_``: the plugin loader does not import it as a task.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gpmotion.bsr import secondary3d as s3
+from gpmotion.task import Task
+
+# Bob and Rex are compared at the paper's resolution: 50 frames/s
+RECORD_EVERY = 20
+
+
+def creature_measures(traj, feet, foot_sites=(), foot_groups=()) -> dict[str, np.ndarray]:
+    """Every term above for a batch.  ``feet``: the foot contact points' names
+    (any other point on the ground means a fall); ``foot_sites``: a site per
+    foot; ``foot_groups``: for a biped, the contact points of each foot."""
+    fig = traj.figure
+    base = traj.base()
+    quat = base[..., 3:7]
+    yaw = s3.heading(quat)
+    d = s3.in_start_frame(traj.com[..., :2], yaw[..., 0])
+    other = [k for k, n in enumerate(fig.contact_names) if n not in feet]
+    fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other])
+    out = {"distance": d[..., -1, 0], "sideways": np.abs(d[..., -1, 1]),
+           "fall": s3.fall_fraction(fell), "rotation": s3.net_rotation(yaw),
+           "turn": s3.net_rotation(yaw), "fell": fell[..., -1].astype(np.float64)}
+    if foot_sites:
+        xy = traj.sites()[..., [fig.site_names.index(n) for n in foot_sites], :2]
+        out["feet_forward"] = s3.feet_forward(xy, yaw[..., 0])
+        if len(foot_groups) == 2:
+            fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
+            force = np.stack([traj.contact_force[..., [fig.contact_names.index(n) for n in g]].sum(-1)
+                              for g in foot_groups], -1)
+            out["steps"] = s3.count_steps(force, fwd, fell, yaw).astype(np.float64)
+    return out
+
+
+class CreatureTask(Task):
+    """A 3-D creature task; ``after`` chains it onto earlier stages."""
+    feet: tuple[str, ...] = ()
+    foot_sites: tuple[str, ...] = ()
+    foot_groups: tuple[tuple[str, ...], ...] = ()
+    record_every = RECORD_EVERY
+    _start = None
+
+    def validate(self):
+        after = self.params.get("after", "")
+        if not isinstance(after, str):
+            raise ValueError(f"task {self.name}: after must be a comma-separated list of controller files")
+
+    def initial_state(self):
+        if not self.params.get("after"):
+            return super().initial_state()
+        if self._start is None:
+            self._start = stage_end([s.strip() for s in self.params["after"].split(",") if s.strip()])
+        q, qd = self._start
+        return q.copy(), qd.copy()
+
+    def measure(self, traj):
+        return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups)
+
+    def terminal_names(self) -> list[str]:
+        """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):
+        com height and vertical velocity, the root's velocity, angular velocity
+        and up axis, every contact force, the driven joints' angles, and time."""
+        fig = self.figure
+        body = ["com_z", "vx", "vy", "com_vz", "wx", "wy", "wz", "up_x", "up_y", "up_z", "t"]
+        return (body + [f"force_{c}" for c in fig.contact_names]
+                + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])
+
+
+def stage_end(paths) -> tuple[np.ndarray, np.ndarray]:
+    """Final (q, qd) of saved controllers run in series (each for its own
+    task's seconds) from the first one's start state."""
+    from gpmotion.compose import composite
+    try:
+        comp = composite.from_controllers(paths)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"after: {exc}") from None
+    traj, _ = composite.run(comp)
+    if traj.diverged[0]:
+        raise ValueError(f"after: the earlier stages {paths} diverge")
+    return traj.q[0, -1].copy(), traj.qd[0, -1].copy()

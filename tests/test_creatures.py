@@ -1,0 +1,334 @@
+"""Issue 17: the 3-D creatures (Cujo, Rex, Bob), fixed and 2-DOF joints, 3-D BSR."""
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gpmotion
+from gpmotion.bsr import contain, secondary3d as s3, senses3d
+from gpmotion.bsr.genome import random_sense_genome, random_time_genome
+from gpmotion.bsr.mutation import relevant_stimulus
+from gpmotion.controllers import schedule
+from gpmotion.figures import load_figure, load_spec
+from gpmotion.sim import spatial3d as K
+from tests.reference import spatial3d_ref as ref
+from tests.test_physics3d import random_state, scratch
+
+FIGURES = Path(gpmotion.__file__).parent / "figures"
+CREATURES = ("cujo", "rex", "bob")
+
+
+def n_rods(fig):
+    return len(fig.body_names)
+
+
+# ---------------------------------------------------------------- figures
+@pytest.mark.parametrize("name, rods, free", [("cujo", 7, 9), ("rex", 15, 10), ("bob", 9, 10)])
+def test_creatures_have_the_papers_rods_and_free_angles(name, rods, free):
+    fig = load_figure(name)
+    assert n_rods(fig) == rods and len(fig.actuator_names) == free
+    slots = 2 * (rods - 1)                        # θ and ψ per joint (Fig. 6)
+    fixed = slots - free
+    if name == "rex":                             # "about two thirds ... fixed"
+        assert abs(fixed / slots - 2 / 3) < 0.05
+    if name == "bob":                             # "roughly one third ... fixed"
+        assert abs(fixed / slots - 1 / 3) < 0.05
+
+
+def test_average_joint_ranges_are_the_papers():
+    def mean_span_deg(name):
+        m = load_figure(name).model
+        return np.degrees(m.hi[m.act_dof] - m.lo[m.act_dof]).mean()
+    assert abs(mean_span_deg("cujo") - 25) < 1          # "average joint-angle range of 25°"
+    assert abs(mean_span_deg("rex") - 40) < 1           # "average range of 40°"
+    assert 20 < mean_span_deg("bob") < 25               # "a little less than 25°"
+
+
+def test_fixed_joint_moves_exactly_like_a_hinge_held_still():
+    """A welded rod (type = "fixed") against the same rod on a hinge whose
+    kinematic actuation holds it at 0: same motion to rounding."""
+    spec = load_spec(FIGURES / "rex.toml")
+    hinged = copy.deepcopy(spec)
+    hinged["name"] = "rex_hinged"
+    for j in hinged["joints"]:
+        if j.get("type") == "fixed":
+            j.update(type="hinge", axis=[0.0, 1.0, 0.0], limits=[-1.0, 1.0], kp=1.0, torque_limit=1.0)
+    a, b = load_figure(spec), load_figure(hinged)
+    assert len(b.model.parent) == len(a.model.parent) + 7          # 7 welded joints
+    scene = gpmotion.make_scene(mu=0.3)
+    qd = np.zeros(a.nv)
+    qd[:6] = [0.3, -0.5, 0.2, 0.1, 0.2, 0.0]                       # tumble and drop
+    ta = gpmotion.rollout(a, scene, schedule.constant(a.model.neutral), n_steps=400, qd0=qd,
+                          actuation="kinematic", default_tau=0.1)
+    qdb = np.zeros(b.nv)
+    qdb[:6] = qd[:6]
+    tb = gpmotion.rollout(b, scene, schedule.constant(b.model.neutral), n_steps=400, qd0=qdb,
+                          actuation="kinematic", default_tau=0.1)
+    assert np.abs(ta.com[0, -1, :3] - ta.com[0, 0, :3]).max() > 0.05     # it moved
+    assert np.allclose(ta.q[0, :, :7], tb.q[0, :, :7], atol=1e-9)
+    assert np.allclose(ta.com, tb.com, atol=1e-9)
+
+
+def test_fixed_joint_combines_mass_com_and_inertia():
+    spec = {"dimensions": 3, "name": "weld", "root": {"type": "free", "body": "a"},
+            "bodies": [{"name": "a", "mass": 2.0, "segment": [[0, 0, 0], [1, 0, 0]], "inertia": [1, 2, 3]},
+                       {"name": "b", "mass": 1.0, "segment": [[0, 0, 0], [0, 0, 1]], "inertia": [0.5, 0.5, 0.1]}],
+            "joints": [{"name": "w", "parent": "a", "child": "b", "type": "fixed", "offset": [1, 0, 0],
+                        "rotation_deg": [90, 0, 0]}]}
+    m = load_figure(spec).model
+    assert len(m.parent) == 1 and m.mass[0] == 3.0
+    cb = np.array([1.0, -0.5, 0.0])                  # b's com, rotated 90° about x
+    assert np.allclose(m.com[0], (2 * np.array([0.5, 0, 0]) + cb) / 3)
+    Ib = np.diag([0.5, 0.1, 0.5])                    # b's inertia in a's axes
+    c = m.com[0]
+
+    def shift(mass, d):
+        return mass * (d @ d * np.eye(3) - np.outer(d, d))
+    want = np.diag([1.0, 2, 3]) + shift(2, np.array([0.5, 0, 0]) - c) + Ib + shift(1, cb - c)
+    assert np.allclose(m.icom[0], want)
+    assert np.allclose(m.seg_b[1], [1.0, -1.0, 0.0])   # b's rod drawn in a's frame
+
+
+@pytest.mark.parametrize("name", CREATURES)
+def test_creature_dynamics_match_the_rnea_crba_reference(name):
+    """The 2-DOF (Euler-chain) and welded joints through ABA against the numpy twin."""
+    fig = load_figure(name)
+    M = fig.model
+    nl, nv = len(M.parent), fig.nv
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        q, qd = random_state(fig, rng)
+        tau = rng.normal(0, 5, nv)
+        fext = rng.normal(0, 5, (nl, 6))
+        presc, presc_qdd, arm = np.zeros(nv, np.int64), np.zeros(nv), np.zeros(nv)
+        s = scratch(fig)
+        K.kinematics(M, q, qd, s["R"], s["pos"], s["E"], s["r"], s["v"], s["c"])
+        qdd, t = np.zeros(nv), tau.copy()
+        K.aba(M, qd, s["E"], s["r"], s["v"], s["c"], t, fext, presc, presc_qdd, arm, 9.81,
+              np.zeros((nl, 6, 6)), np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros(nl),
+              np.zeros(nl), np.zeros((nl, 6)), qdd, np.zeros((3, 6, 6)), np.zeros((3, 6)))
+        qdd_ref, _ = ref.forward_dynamics(M, q, qd, tau, 9.81, fext, presc, presc_qdd, arm)
+        assert np.allclose(qdd, qdd_ref, rtol=1e-9, atol=1e-8)
+
+
+def test_cujo_conserves_momentum_while_moving_its_2dof_joints_in_free_fall():
+    fig = load_figure("cujo")
+    qd0 = np.zeros(fig.nv)
+    qd0[:6] = [0.3, -0.2, 0.4, 0.2, 0.1, -0.3]
+    n = fig.n_act
+    ctrl = schedule.sines(np.full(n, 0.2), np.linspace(0.6, 1.4, n), np.linspace(3, 9, n), np.arange(n))
+    tr = gpmotion.rollout(fig, gpmotion.make_scene(gravity=0.0, ground=False), ctrl, n_steps=2000,
+                          qd0=qd0, record_every=100)
+    assert np.abs(tr.q[0, -1, 7:] - tr.q[0, 0, 7:]).max() > 0.05
+    mom = [ref.momentum(fig.model, q, qd) for q, qd in zip(tr.q[0], tr.qd[0])]
+    P = np.array([p for p, _ in mom])
+    L = np.array([l_ for _, l_ in mom])
+    # semi-implicit Euler: first-order drift (test_physics3d checks the order)
+    assert np.abs(P - P[0]).max() < 0.01 * np.linalg.norm(P[0])
+    assert np.abs(L - L[0]).max() < 0.01 * np.linalg.norm(L[0])
+
+
+@pytest.mark.parametrize("name", CREATURES)
+def test_creatures_stand_under_kinematic_joints_except_bob(name):
+    tr = gpmotion.simulate(name, 2.0, actuation="kinematic", default_tau=0.1)
+    drift = np.abs(tr.com[0, -1, :2] - tr.com[0, 0, :2]).max()
+    if name == "bob":          # point feet: he topples, as the paper says
+        assert tr.com[0, -1, 2] < 0.6 * tr.com[0, 0, 2]
+    else:
+        assert drift < 0.05 and tr.com[0, -1, 2] > 0.9 * tr.com[0, 0, 2]
+
+
+# ---------------------------------------------------------------- parameter counts
+def test_rex_time_based_controller_has_47_free_variables():
+    """§4.1: 2NR − 1 = 119 variables for N = 15 rods, R = 4; 47 of them free."""
+    task = gpmotion.get_task("rex_walk")
+    fam = gpmotion.families.make_family("bsr-time", task, rules=4, segments="variable")
+    g = fam.random(np.random.default_rng(0))
+    N, R = n_rods(task.figure), 4
+    assert 2 * N * R - 1 == 119
+    assert (R - 1) + (2 * N - 2) * R + R == 119
+    assert g.n_parameters == 47
+    assert random_time_genome(np.random.default_rng(0), 4, fam.limits, 0.05, 4.0, 4.0).n_parameters == 44
+
+
+def test_3d_sense_based_rule_size():
+    """V = 10 body senses + one force per contact + one angle per driven joint;
+    a rule has 2V + n_act + 1 numbers (μ, λ, θ₀, τ)."""
+    for name, task in (("bob", "bob_walk"), ("rex", "rex_walk")):
+        t = gpmotion.get_task(task)
+        fam = gpmotion.families.make_family("bsr-sense", t, rules=10)
+        V = 10 + len(t.figure.contact_names) + len(t.figure.actuator_names)
+        assert fam.senses3d.plan.n_senses == V
+        g = fam.random(np.random.default_rng(0))
+        assert g.n_parameters == 10 * (2 * V + len(t.figure.actuator_names) + 1)
+
+
+# ---------------------------------------------------------------- the filter
+def test_low_pass_step_response():
+    alpha = senses3d.filter_alpha(0.02, 0.05)
+    assert alpha == pytest.approx(1 - np.exp(-0.4))
+    x = np.zeros((60, 1))
+    x[10:] = 1.0
+    y = senses3d.low_pass(x, alpha)[:, 0]
+    k = np.arange(50)
+    assert np.allclose(y[10:], 1 - (1 - alpha) ** (k + 1))
+    assert y[10 + 1] < 1 - np.exp(-1) < y[10 + 2]        # 63 % after τ_f = 2.5 samples of input
+    # a 25 Hz chatter passes at under a third, a 1 Hz gait at over 95 %
+    t = np.arange(500) * 0.02
+    for f, lo, hi in ((25.0, 0.0, 0.33), (1.0, 0.95, 1.0)):
+        y = senses3d.low_pass(np.sin(2 * np.pi * f * t)[:, None], alpha)[100:, 0]
+        assert lo < np.abs(y).max() <= hi
+
+
+def test_sense_kernel_filters_and_selects_as_its_numpy_twin():
+    task = gpmotion.get_task("bob_walk", seconds=1.0)
+    fam = gpmotion.families.make_family("bsr-sense", task)
+    ev = gpmotion.evaluate.InProcessEvaluator(task, fam)
+    rng = np.random.default_rng(3)
+    gs = [fam.random(rng) for _ in range(3)]
+    for _ in range(3):                      # contain rules: several rules get to fire
+        tr = ev.rollout(gs, record_senses=True)
+        gs = [contain.contain_rule(g, rng, fam.normalized(tr.senses[e])) for e, g in enumerate(gs)]
+    tr = ev.rollout(gs, record_senses=True)
+    fired = set()
+    for e, g in enumerate(gs):
+        active = senses3d.select_rules(g, fam.normalized(tr.senses[e]))
+        fired |= set(active.tolist())
+        assert np.array_equal(tr.targets[e][:, fam.actuators], g.theta0[active])
+    assert len(fired) > 1
+
+
+def test_senses_are_in_the_heading_frame():
+    fig = load_figure("rex")
+    plan = senses3d.sense_plan(fig, range(fig.n_act), 20, 1e-3)
+    raw = np.zeros((1, len(fig.sense_names)))
+    names = fig.sense_names
+    raw[0, names.index("yaw")] = np.pi / 2                 # facing +y, moving +y, up tilted to +y
+    raw[0, names.index("vy")] = 1.0
+    raw[0, names.index("up_y")] = 0.5
+    raw[0, names.index("wz")] = 2.0
+    d = dict(zip(plan.names, plan.derived(raw)[0]))
+    assert d["v_fwd"] == pytest.approx(1.0) and d["v_left"] == pytest.approx(0.0, abs=1e-12)
+    assert d["up_fwd"] == pytest.approx(0.5) and d["w_up"] == 2.0
+
+
+# ---------------------------------------------------------------- contain
+def test_contain_boxes_contain_their_point_and_corner_boxes_do_not():
+    rng = np.random.default_rng(0)
+    traj = rng.uniform(0, 1, (40, 30))
+    for _ in range(200):
+        mu, lam, p, f = contain.containing_stimulus(rng, traj)
+        assert np.allclose(p, traj[f])
+        assert np.all(np.abs(lam * (p - mu)) < 1)               # inside on every sense
+        mu2, lam2, p2, _ = relevant_stimulus(rng, traj)         # 2-D: a corner on the point
+        assert np.allclose(np.abs(lam2 * (p2 - mu2)), 1)
+
+
+def test_a_contained_rule_is_a_candidate_at_its_point():
+    rng = np.random.default_rng(1)
+    g = random_sense_genome(rng, 8, 30, np.array([[-1.0, 1.0]] * 4), 0.05, 4.0)
+    traj = rng.uniform(0, 1, (50, 30))
+    for _ in range(20):
+        new = contain.contain_rule(g, rng, traj, rule=5)
+        inside = np.all(np.abs(new.lam[5] * (traj - new.mu[5])) < 1, axis=1)
+        assert inside.any()                                     # some frame lies in the box
+        assert not np.shares_memory(new.mu, g.mu)
+
+
+class _Counter:
+    def __init__(self):
+        self.n = 0
+
+
+def test_enriched_search_starts_from_the_best_of_100_enriched_controllers():
+    rng0 = np.random.default_rng(0)
+    limits = np.array([[-1.0, 1.0]] * 2)
+
+    def init(rng):
+        return random_sense_genome(rng, 4, 3, limits, 0.05, 2.0)
+
+    def score(g):                            # lower is better: θ₀ near 0.5
+        return float(np.abs(g.theta0 - 0.5).sum())
+
+    s = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
+                                     rng=rng0, maximize=False)
+    traj = np.full((5, 3), 0.5)
+    sizes = []
+    while not s.done:
+        cand = s.ask()
+        sizes.append(len(cand))
+        s.tell([score(g) for g in cand], [traj] * len(cand))
+        if len(sizes) == 2:                  # checkpoint mid-enrichment and resume
+            s2 = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
+                                              rng=np.random.default_rng(9), maximize=False)
+            s2.load_state_dict(s.state_dict())
+            assert s2.round == 1 and len(s2.pool[0]) == 100
+            assert [score(g) for g in s2.ask()] == [score(g) for g in s.ask()]
+    assert sizes == [100, 100, 100, 100] + [10] * 5
+    assert s.evaluations == 450
+    assert s.best_score <= min(s.scores)
+
+
+# ---------------------------------------------------------------- secondary terms
+def test_heading_sideways_and_rotation():
+    yaw = np.linspace(0, 3 * np.pi, 50)                       # 1.5 turns: unwrapped
+    quat = np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], -1)
+    assert np.allclose(s3.heading(quat), yaw)
+    assert s3.net_rotation(s3.heading(quat)) == pytest.approx(3 * np.pi)
+    xy = np.stack([np.linspace(0, 1, 5), np.linspace(0, 1, 5)], -1)[None]
+    d = s3.in_start_frame(xy, np.array([np.pi / 4]))
+    assert d[0, -1, 0] == pytest.approx(np.sqrt(2)) and d[0, -1, 1] == pytest.approx(0, abs=1e-12)
+
+
+def test_fallen_and_steps():
+    up = np.array([1.0, 1.0, 0.9, 0.3, 1.0])
+    com = np.ones(5)
+    fell = s3.fallen(up, com, np.zeros((5, 0)))
+    assert fell.tolist() == [False, False, False, True, True]           # stays fallen
+    assert s3.fall_fraction(fell) == pytest.approx(0.4)
+    # two feet alternate touchdowns, each landing 0.2 m ahead of the other
+    force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
+    fwd = np.array([[0, 0], [0, 0], [0.2, 0], [0.2, 0], [0.2, 0.4], [0.2, 0.4], [0.6, 0.4]])
+    ok = np.zeros(7, bool)
+    assert s3.count_steps(force, fwd, ok, np.zeros(7)) == 3
+    assert s3.count_steps(force, fwd, np.arange(7) >= 3, np.zeros(7)) == 1   # falls after the first
+    assert s3.count_steps(force, fwd, ok, np.r_[0.0, np.full(6, 1.0)]) == 0     # turned away
+
+
+# ---------------------------------------------------------------- tasks
+TASKS = ["cujo_travel", "rex_walk", "rex_turn", "bob_walk"]
+
+
+@pytest.mark.parametrize("task", TASKS)
+def test_creature_tasks_pass_the_contract_checks(task):
+    gpmotion.check_task(task)
+
+
+@pytest.mark.parametrize("task", TASKS)
+@pytest.mark.parametrize("family", ["bsr-time", "bsr-sense"])
+def test_bsr_families_score_creature_tasks_deterministically(task, family):
+    t = gpmotion.get_task(task, seconds=0.5)
+    fam = gpmotion.families.make_family(family, t)
+    gs = [fam.random(np.random.default_rng(k)) for k in range(3)]
+    ev = gpmotion.evaluate.InProcessEvaluator(t, fam)
+    a, b = ev.evaluate(gs), ev.evaluate(gs)
+    assert np.all(np.isfinite(a.costs)) and np.array_equal(a.costs, b.costs)
+    if family == "bsr-sense":
+        assert a.extras[0].shape == (26, fam.senses3d.plan.n_senses)
+
+
+def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
+    from gpmotion.controller_file import save_controller
+    walk = gpmotion.get_task("rex_walk", seconds=0.5)
+    fam = gpmotion.families.make_family("bsr-time", walk, segments="variable", t_per=0.5)
+    g = fam.random(np.random.default_rng(2))
+    path = tmp_path / "walk.json"
+    save_controller(path, walk, g, family=fam)
+    ev = gpmotion.evaluate.InProcessEvaluator(walk, fam)
+    end = ev.rollout([g])
+    turn = gpmotion.get_task("rex_turn", after=str(path))
+    q0, qd0 = turn.initial_state()
+    assert np.allclose(q0, end.q[0, -1]) and np.allclose(qd0, end.qd[0, -1])
+    with pytest.raises(ValueError, match="after"):
+        gpmotion.get_task("rex_turn", after=str(tmp_path / "missing.json")).initial_state()

@@ -1,0 +1,49 @@
+"""benchmarks/herman_success.py: resumes per run, tabulates from its file."""
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture()
+def bench():
+    spec = importlib.util.spec_from_file_location("herman_success", ROOT / "benchmarks" / "herman_success.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_benchmark_runs_only_what_its_file_lacks_and_tables_the_file(bench, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "runs.jsonl"
+    out.write_text(json.dumps({"config": "touch_nose", "seed": 0, "success": True, "wall_s": 80.0,
+                               "cpu_s": 150.0, "load": 1.5, "final_cost": 0.1, "facts": []}) + "\n")
+    calls = []
+
+    def fake(name, seed, tmp=None):
+        calls.append((name, seed))
+        return {"config": name, "seed": seed, "success": seed != 2, "wall_s": 70.0 + seed, "cpu_s": 100.0,
+                "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
+
+    monkeypatch.setattr(bench, "run_one", fake)
+    assert bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)]) == 0
+    assert calls == [("point", 0), ("touch_nose", 1), ("point", 1), ("touch_nose", 2), ("point", 2)]
+    table = capsys.readouterr().out
+    assert "| touch_nose | 2 / 3 | 80 | 150 | 1.5–2.0 |" in table
+    assert "| point | 2 / 3 | 72 | 100 | 2.0–2.0 |" in table
+    assert len(out.read_text().splitlines()) == 6
+    calls.clear()
+    bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)])
+    assert calls == []                                       # all there: nothing re-run
+
+
+def test_benchmark_names_every_task_and_preset_of_the_bar_and_refuses_unknown(bench, tmp_path, capsys):
+    from gpmotion.task import get_task
+    assert set(bench.CONFIGS) == {"touch_nose", "touch_object/0", "touch_object/1", "touch_object/2",
+                                  "point", "wave", "reach_standing"}
+    for task, params in {**bench.CONFIGS, **bench.EXTRA}.values():
+        get_task(task, **params)                             # each builds
+    assert bench.main(["--only", "bogus", "--out", str(tmp_path / "x.jsonl")]) == 2
+    assert "bogus" in capsys.readouterr().err
