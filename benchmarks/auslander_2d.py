@@ -89,7 +89,6 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     folder ``OUT/runs/NAME-seedS-BUDGET``, which checkpoints every 10 s: a
     killed study resumes each unfinished run where it stopped, and the result
     is the same as an uninterrupted run's (the run loop's guarantee)."""
-    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     from gpmotion import gaits
     from gpmotion.families import make_family
     from gpmotion.replay import replay_genome
@@ -283,4 +282,8 @@ def _runs(todo, workers: int):
 
 
 if __name__ == "__main__":
+    # one numba thread per run (pool workers inherit it); set before numba starts its
+    # threads, and never from run_one: in a process whose threads are running (a test),
+    # a changed NUMBA_NUM_THREADS makes every later compile fail
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     main()

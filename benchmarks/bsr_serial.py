@@ -14,9 +14,8 @@ import time
 
 import numpy as np
 
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
-from gpmotion.search.adapters import make_search
 from gpmotion.task import get_task
 
 
@@ -31,7 +30,7 @@ def main(argv=None):
     task = get_task("starman_travel", seconds=args.seconds)
     fam = make_family("bsr-time", task)
     rounds = args.evaluations // args.working - 1
-    search = make_search(fam, args.seed, n_working=args.working, n_generations=rounds)
+    search = fam.make_search(args.seed, n_working=args.working, n_generations=rounds)
     ev = InProcessEvaluator(task, fam)
     ev.evaluate([fam.random(np.random.default_rng(1))])          # compile / load the cache
     t0, c0 = time.perf_counter(), time.process_time()

@@ -5,6 +5,7 @@
     python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--out DIR]
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
     python benchmarks/creatures_3d.py mujoco [--quick]
+    python benchmarks/creatures_3d.py curves LABEL=RUN_DIR ... [--out PNG]
 
 * ``rates``: ``gpmotion compare`` on a creature task with the families'
   creature settings (``FAMILY_OPTIONS``: time-based BSR with the paper's
@@ -63,13 +64,11 @@ def rates(a) -> int:
 
 def search(task, family: str, seed: int, budget: int, stop_on_success=False):
     """One search (the compare loop); returns (best genome, family, facts)."""
-    from gpmotion.evaluate import InProcessEvaluator
     from gpmotion.families import make_family
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.replay import replay_genome
-    from gpmotion.search.adapters import make_search
-    from gpmotion.compare import _search_opts
     fam = make_family(family, task, **options(task.name).get(family, {}))
-    s = make_search(fam, seed, **_search_opts(family, budget, 100, task))
+    s = fam.make_search(seed, n_working=10, n_generations=max(1, budget // 10 - 1))
     ev = InProcessEvaluator(task, fam, actuation=ACTUATION)
     evals, first, t0, c0 = 0, None, time.perf_counter(), time.process_time()
     while not s.done and evals < budget:
@@ -153,6 +152,30 @@ def mujoco(a) -> int:
     return compare_mujoco.main(["--only", "creatures"] + (["--quick"] if a.quick else []))
 
 
+def curves(a) -> int:
+    """Learning curves as the paper's Figs. 7 and 8: the best controller's
+    reward (−cost) against evaluations, one line per run (log.csv files)."""
+    import csv
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for run in a.runs:
+        label, _, path = run.partition("=")
+        rows = list(csv.DictReader(open(Path(path) / "log.csv")))
+        ax.plot([int(r["evaluations"]) for r in rows], [-float(r["best_final"]) for r in rows],
+                label=label, lw=1.2)
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("fitness of the best controller (−cost)")
+    ax.set_title(a.title)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=110)
+    print(f"wrote {a.out}")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -174,8 +197,13 @@ def main(argv=None) -> int:
     v.add_argument("--budget", type=int, default=10000)
     m = sub.add_parser("mujoco")
     m.add_argument("--quick", action="store_true")
+    c = sub.add_parser("curves")
+    c.add_argument("runs", nargs="+", help="LABEL=RUN_DIR (a gpmotion run directory)")
+    c.add_argument("--title", default="")
+    c.add_argument("--out", default="curves.png")
     a = p.parse_args(argv)
-    return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco}[a.cmd](a)
+    return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
+            "curves": curves}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -115,7 +115,7 @@ def main(argv=None):
     if args.quick:
         args.population, args.seconds, args.repeats, args.tasks, args.latency_tasks = 200, 1.0, 2, 300, 50
 
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.evaluators import DaskEvaluator, ProcessPoolEvaluator
     from gpmotion.families import make_family
     from gpmotion.task import get_task

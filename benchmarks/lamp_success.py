@@ -15,7 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from gpmotion.gp.presets import apply_preset
+from gpmotion.families import family_class
 from gpmotion.records import read_json
 from gpmotion.run import RunConfig, run
 
@@ -23,7 +23,7 @@ from gpmotion.run import RunConfig, run
 def run_seed(task: str, seed: int, params: dict, controller: str = "gp",
              preset: str | None = None, tmp: str | None = None) -> dict:
     """One quiet run; its result row (wall time, success, final cost, facts...)."""
-    fam, search = apply_preset(preset, task, family=controller)
+    fam, search = family_class(controller).apply_preset(preset, task, {}, {}) if preset else ({}, {})
     with tempfile.TemporaryDirectory(dir=tmp) as d:
         out = Path(d) / f"seed{seed}"
         t0 = time.perf_counter()

@@ -16,28 +16,25 @@ import argparse
 
 import numpy as np
 
-from gpmotion.compare import _search_opts
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
-from gpmotion.search.adapters import make_search
 from gpmotion.task import get_task
 
 
 def measure(task_name="lamp_hop", family="bsr-time", budget=3000, seed=0, actuation="pd"):
     task = get_task(task_name)
     fam = make_family(family, task)
-    search = make_search(fam, seed, **_search_opts(family, budget, 100, task))
+    s = search = fam.make_search(seed, **fam.budget_settings(budget, 100))
     ev = InProcessEvaluator(task, fam, actuation)
     accepted = {"progress < 0.1": 0, "0.1..0.5": 0, "progress > 0.5": 0}
     while not search.done:
         genomes = search.ask()
-        mutants = search.search.working is not None and not getattr(search.search, "rescoring", False)
+        mutants = s.working is not None and not s.rescoring
         p = search.progress
         search.tell(ev.evaluate(genomes, p))
         if mutants:                  # an accepted mutant is the very object handed out
             key = "progress < 0.1" if p < 0.1 else "progress > 0.5" if p > 0.5 else "0.1..0.5"
-            accepted[key] += sum(w is g for w, g in zip(search.search.working, genomes))
-    s = search.search
+            accepted[key] += sum(w is g for w, g in zip(s.working, genomes))
     full = ev.evaluate(list(s.working) + [s.best_genome], 1.0).costs
     return {"stored": np.asarray(s.scores, float), "full": full[:-1],
             "best_stored": float(s.best_score), "best_full": float(full[-1]),

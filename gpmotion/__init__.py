@@ -26,13 +26,13 @@ def _mount_plugin_packages():
 _mount_plugin_packages()
 from .version import __version__
 
-from .check import check_primitive, check_task
-from .evaluate import Evaluation
+from .check import check_family, check_primitive, check_task
+from .evaluation import Evaluation
 from .evaluators import make_evaluator
 from .families import make_family
 from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
 from .gp.primitives import STANDARD as STANDARD_PRIMITIVES, primitive
-from .gp.toolbox import evaluate_population, make_toolbox
+from .toolbox import evaluate_population, make_toolbox
 from .model import Figure, Model, Scene, make_scene
 from .plugins import load_folder as load_plugins
 from .records import read_json
@@ -43,7 +43,7 @@ from .sim.rollout import Trajectory, rollout, simulate
 from .task import Ease, Task, Term, get_task, register_task, task_ids, task_names
 from . import compose  # composite motions: script language, composites, transition search, robust starts
 
-__all__ = ["Ease", "Task", "Term", "check_primitive", "check_task", "get_task", "register_task",
+__all__ = ["Ease", "Task", "Term", "check_family", "check_primitive", "check_task", "get_task", "register_task",
            "task_names", "task_ids", "STANDARD_PRIMITIVES", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
            "figure_names", "load_figure", "make_scene", "register_figure", "rollout", "simulate",
            "primitive", "load_plugins", "RunConfig", "run", "load_controller", "replay_genome",

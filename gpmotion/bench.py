@@ -117,13 +117,13 @@ def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] | None = Non
 
     from deap import gp
 
-    from .families import make_family
+    from .families.gp import GPFamily
     from .gp.bytecode import tree_to_tokens
     from .task import get_task
 
     task_name, default_nodes = GP_BENCH_TASKS[figure]
     task = get_task(task_name)
-    fam = make_family("gp", task)
+    fam = GPFamily(task)
     lo, hi = nodes or default_nodes
     saved = random.getstate()
     try:
@@ -251,12 +251,12 @@ def _gp_bench(population: int, threads: int, repeats: int, seed: int = 0,
 
     from deap import gp
 
-    from .evaluate import InProcessEvaluator
-    from .families import make_family
+    from .inprocess import InProcessEvaluator
+    from .families.gp import GPFamily
     from .task import get_task
 
     task = get_task(task_name)
-    fam = make_family("gp", task)
+    fam = GPFamily(task)
     saved = random.getstate()
     random.seed(seed)
     genomes = [[gp.PrimitiveTree(gp.genHalfAndHalf(fam.pset, 2, 6)) for _ in fam.actuators]

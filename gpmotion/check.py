@@ -133,8 +133,8 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
 
     from deap import gp as dgp
 
-    from gpmotion.evaluate import InProcessEvaluator
-    from gpmotion.families import make_family
+    from gpmotion.inprocess import InProcessEvaluator
+    from gpmotion.families.gp import GPFamily
     from gpmotion.task import Task, get_task
 
     name = getattr(task, "name", task)
@@ -145,7 +145,7 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
             t = task(**({"seconds": seconds} if seconds and "seconds" in task.params else {}))
         else:
             t = get_task(task, **({"seconds": seconds} if seconds else {}))
-        fam = make_family("gp", t)
+        fam = GPFamily(t)
     except Exception as e:  # noqa: BLE001 - report any failure as a contract failure
         raise AssertionError(f"task {name}: does not build: {e}") from e
     term_names = [x.name for x in t.terms]
@@ -189,3 +189,135 @@ def check_task(task, *, n_controllers: int = 6, seed: int = 0, seconds: float | 
         if not np.all(np.isfinite(c.costs)):
             raise AssertionError(f"task {name}: non-finite cost at the curriculum's start")
     return None
+
+
+# ------------------------------------------------------------------ families
+
+ROW_COLUMNS = ("generation", "progress", "best_so_far", "best_final", "gen_min", "gen_median",
+               "gen_mean", "gen_max", "evaluated", "solved", "failed")
+
+
+def _family_class(family):
+    from gpmotion.families.base import Family, family_class
+    cls = family_class(family) if isinstance(family, str) else family
+    if not (isinstance(cls, type) and issubclass(cls, Family) and cls.name):
+        raise AssertionError(f"{family!r} is not a named Family subclass")
+    return cls
+
+
+def _json_round_trip(fam, genome, what: str):
+    import json
+    d = fam.to_json(genome)
+    try:
+        text = json.dumps(d, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise AssertionError(f"{what}: to_json is not plain JSON ({e})") from e
+    again = fam.to_json(fam.from_json(json.loads(text)))
+    if again != d:
+        raise AssertionError(f"{what}: from_json(to_json(genome)) is another genome")
+    if fam.to_json(fam.copy(genome)) != d:
+        raise AssertionError(f"{what}: copy(genome) is another genome")
+    return d
+
+
+def check_family(family, *, task: str = "lamp_hop", seconds: float = 0.3, seed: int = 0,
+                 n_genomes: int = 4) -> None:
+    """Run the public contract of a controller family (a name or a Family class).
+
+    Checks its declaration (actuation, search class, CLI options), then on
+    ``task``: random genomes are deterministic for a seed, survive safe JSON
+    and ``copy`` unchanged, garbage is refused with a ValueError, the batch
+    encodes and rolls out to finite costs twice alike; its search under a
+    small budget asks, is told, writes a log row, and resumes exactly from
+    a JSON round trip of its ``state_dict``.  Raises AssertionError naming
+    the problem.
+    """
+    import json
+
+    from gpmotion import cli_options
+    from gpmotion.controllers import ControllerBatch
+    from gpmotion.inprocess import InProcessEvaluator
+    from gpmotion.search.base import Search
+    from gpmotion.task import get_task
+
+    cls = _family_class(family)
+    name = f"family {cls.name}"
+    if cls.default_actuation not in ("pd", "kinematic"):
+        raise AssertionError(f"{name}: default_actuation {cls.default_actuation!r}")
+    if not (isinstance(cls.search_class, type) and issubclass(cls.search_class, Search)):
+        raise AssertionError(f"{name}: search_class must be a gpmotion.search.base.Search")
+    for flag in cls.cli:
+        try:
+            option = cli_options.get_option(flag)
+        except KeyError:
+            raise AssertionError(f"{name}: its cli names {flag}, not a registered option") from None
+        if cls.name not in option.keys:
+            raise AssertionError(f"{name}: {flag} does not apply to it (register_family)")
+    t = get_task(task, seconds=seconds)
+    fam = cls(t)
+    genomes = [fam.random(np.random.default_rng(seed)) for _ in range(2)]
+    if fam.to_json(genomes[0]) != fam.to_json(genomes[1]):
+        raise AssertionError(f"{name}: random(rng) differs for the same seed")
+    rng = np.random.default_rng(seed)
+    genomes = [fam.random(rng) for _ in range(n_genomes)]
+    for i, g in enumerate(genomes):
+        _json_round_trip(fam, g, f"{name}, genome {i}")
+    for bad in (None, [], "x", {}, {"kind": "?"}, 1.5):
+        try:
+            fam.from_json(bad)
+        except ValueError:
+            continue
+        except Exception as e:  # noqa: BLE001 - any other type is the failure reported
+            raise AssertionError(f"{name}: from_json({bad!r}) raised {type(e).__name__}, "
+                                 "not ValueError") from e
+        raise AssertionError(f"{name}: from_json({bad!r}) accepted garbage")
+    batch = fam.encode(genomes)
+    if not isinstance(batch, ControllerBatch) or batch.n_episodes != n_genomes \
+            or not Path(batch.module).is_file():
+        raise AssertionError(f"{name}: encode must give a ControllerBatch of one row per genome "
+                             "and an existing kernel module")
+    ev = InProcessEvaluator(t, fam)
+    a, b = ev.evaluate(genomes), ev.evaluate(genomes)
+    if not np.all(np.isfinite(a.costs)) or not np.array_equal(a.costs, b.costs):
+        raise AssertionError(f"{name}: costs must be finite and repeat exactly: {a.costs} {b.costs}")
+    if a.extras is not None and len(a.extras) != n_genomes:
+        raise AssertionError(f"{name}: extras must be None or one per genome")
+    _check_family_search(name, fam, ev, seed, json)
+
+
+def _check_family_search(name, fam, ev, seed, json) -> None:
+    settings = fam.budget_settings(60, 8 if fam.takes_population else None)
+    unknown = set(settings) - fam.setting_names()
+    if unknown:
+        raise AssertionError(f"{name}: budget_settings gives {sorted(unknown)}, not settings "
+                             f"of its search ({sorted(fam.setting_names())})")
+
+    def step(search):
+        genomes = search.ask()
+        for g in genomes[:2]:
+            _json_round_trip(fam, g, f"{name}, asked genome")
+        search.tell(ev.evaluate(genomes, search.progress))
+
+    s = fam.make_search(seed, **settings)
+    step(s)
+    row = s.row()
+    missing = [c for c in ROW_COLUMNS if c not in row]
+    if missing:
+        raise AssertionError(f"{name}: its log row lacks {missing}")
+    if s.best is None or not np.isfinite(s.best_cost):
+        raise AssertionError(f"{name}: no best (or a non-finite cost) after a round")
+    try:
+        state = json.loads(json.dumps(s.state_dict(), allow_nan=False))
+    except (TypeError, ValueError) as e:
+        raise AssertionError(f"{name}: state_dict is not plain JSON ({e})") from e
+    if s.done:
+        raise AssertionError(f"{name}: a budget of 60 evaluations ended after one round")
+    resumed = fam.make_search(seed + 1, **settings)
+    resumed.load_state_dict(state)
+    nxt, again = s.ask(), resumed.ask()
+    if [fam.to_json(g) for g in nxt] != [fam.to_json(g) for g in again]:
+        raise AssertionError(f"{name}: a search restored from its state_dict asks otherwise")
+    step(s)
+    step(resumed)
+    if s.row() != resumed.row() or s.best_cost != resumed.best_cost:
+        raise AssertionError(f"{name}: a restored search is told alike but reports otherwise")

@@ -50,16 +50,20 @@ def _params(items):
 
 def _add_run_args(p):
     from .cli_options import add_arguments
+    from .families import DEFAULT_FAMILY, family_names
     p.add_argument("task", help="task name (gpmotion list tasks; gpmotion show TASK)")
-    p.add_argument("--controller", default="gp", help="gp | bsr-sense | bsr-time (default gp)")
+    p.add_argument("--controller", default=DEFAULT_FAMILY,
+                   help=f"controller family: {' | '.join(family_names())} (default {DEFAULT_FAMILY}; "
+                        "gpmotion list controllers)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--seeds", type=int, default=1,
                    help="independent runs with seeds seed..seed+K-1; prints an aggregate at the end")
     p.add_argument("--actuation", choices=["pd", "kinematic"],
-                   help="pd: targets drive PD servos (GP default); kinematic: joints follow "
-                        "targets with a time constant τ (BSR default)")
-    p.add_argument("--preset", help="GP preset: default | gritz-hahn (the paper's terminals, "
-                   "functions and breeding; lamp tasks); explicit options win")
+                   help="pd: targets drive PD servos; kinematic: joints follow targets with a "
+                        "time constant τ (default: the family's, gpmotion list controllers)")
+    p.add_argument("--preset", help="a family's named configuration, e.g. gp's default | "
+                   "gritz-hahn (the paper's terminals, functions and breeding; lamp tasks); "
+                   "explicit options win")
     p.add_argument("--figure", metavar="VARIANT.toml",
                    help="run the task on a figure variant, a TOML file or a registered figure "
                         "(it must have the joints, sites, contacts and senses the task uses)")
@@ -104,6 +108,7 @@ def _activate_plugins(args) -> list:
 
 
 def parser() -> argparse.ArgumentParser:
+    from .families import family_names
     ap = argparse.ArgumentParser(prog="gpmotion", description="Evolve controllers for physically "
                                  "simulated articulated figures (Gritz-Hahn GP, Auslander BSR).",
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -148,15 +153,18 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--gif", help="also write a GIF")
     p.add_argument("--trees", metavar="PNG", help="also draw a GP controller's trees")
     _add_plugins_arg(p)
-    p = sub.add_parser("compare", help="GP vs BSR on one task under one evaluation budget")
+    p = sub.add_parser("compare", help="controller families side by side on one task under "
+                       "one evaluation budget")
     p.add_argument("task", help="task name (gpmotion list tasks)")
-    p.add_argument("--controllers", default="gp,bsr-sense,bsr-time",
-                   help="comma list of controller families (default gp,bsr-sense,bsr-time)")
+    p.add_argument("--controllers", default=",".join(family_names()),
+                   help=f"comma list of controller families (default {','.join(family_names())})")
     p.add_argument("--seeds", type=int, default=5, help="runs per family, seeds 0..K-1 (default 5)")
     p.add_argument("--budget", type=int, default=5000, help="evaluations per run (default 5000)")
     p.add_argument("--actuation", choices=["pd", "kinematic"], default="pd",
                    help="one actuation for every family (default pd)")
-    p.add_argument("--population", type=int, help="GP population (default 100; needs gp in --controllers)")
+    p.add_argument("--population", type=int,
+                   help="population of the population-based searches under the budget (default: "
+                        "each family's; needs such a family in --controllers)")
     p.add_argument("--param", action="append", metavar="KEY=VALUE",
                    help="task parameter (gpmotion show TASK)")
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
@@ -171,7 +179,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--scale", type=float, default=100.0,
                    help="file units per metre (default 100: centimetres; import in Blender with scale 0.01)")
     _add_plugins_arg(p)
-    p = sub.add_parser("check", help="run the public contract checks on every primitive and task")
+    p = sub.add_parser("check", help="run the public contract checks on every primitive, task "
+                       "and controller family")
     _add_plugins_arg(p)
     p.add_argument("--only-plugins", action="store_true",
                    help="check only what the --plugins folders add, not the built-ins")
@@ -200,12 +209,45 @@ def main(argv=None) -> int:
     except BrokenPipeError:                 # `gpmotion show TASK | head`
         sys.stderr.close()
         return 0
-    except (ValueError, KeyError, OSError, ImportError, RuntimeError) as e:
+    except Exception as e:
+        if not _input_error(e):
+            raise                           # a bug: its traceback, not a one-liner
         msg = e.args[0] if isinstance(e, KeyError) and e.args else str(e)
-        if type(e).__name__ in ("WorkerLost", "SchedulerLost") and "resume" not in msg:
+        if _evaluator_lost(e) and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
         return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
+
+
+def _evaluator_lost(e: BaseException) -> bool:
+    from .evaluators import SchedulerLost, WorkerLost
+    return isinstance(e, (WorkerLost, SchedulerLost))
+
+
+def _input_error(e: BaseException) -> bool:
+    """Errors that are the user's input, not a bug: a ValueError (our bad-input
+    convention) or an unknown name (KeyError) raised by gpmotion's own code or
+    a plugin, a file the OS refuses, and our error types that carry an
+    ``exit_code`` (a lost worker or scheduler, the dask extra missing).  The
+    same types raised inside numpy, numba, DEAP or the standard library are
+    bugs, and so is every other type (TypeError, RuntimeError...)."""
+    if isinstance(e, OSError) or hasattr(type(e), "exit_code"):
+        return True
+    if not isinstance(e, (ValueError, KeyError)):
+        return False
+    tb = e.__traceback__
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    return _ours(tb.tb_frame)
+
+
+def _ours(frame) -> bool:
+    """Code of gpmotion (its package, tasks, primitives) or of a plugin folder."""
+    from . import plugins
+    if str(frame.f_globals.get("__name__", "")).startswith("gpmotion"):
+        return True
+    f = Path(frame.f_code.co_filename).resolve()
+    return any(f.is_relative_to(d) for d in getattr(plugins, "_FOLDERS", {}))
 
 
 def _help(ap, topic):
@@ -227,7 +269,7 @@ def _help(ap, topic):
 
 def cmd_list(args):
     from . import figure_names
-    from .families import FAMILIES
+    from .families import family_class, family_names
     from .gp import primitives
     from .task import task_class, task_ids
     _activate_plugins(args)
@@ -244,7 +286,10 @@ def cmd_list(args):
     if args.what in ("all", "primitives"):
         print("primitives:", ", ".join(f"{n}/{primitives.get(n).arity}" for n in primitives.names()))
     if args.what in ("all", "controllers"):
-        print("controllers:", ", ".join(FAMILIES))
+        print("controllers:")
+        for n in family_names():
+            c = family_class(n)
+            print(f"  {n:<12} {c.description} (default actuation {c.default_actuation})")
 
 
 def cmd_show(args):
@@ -255,12 +300,12 @@ def cmd_show(args):
 
 def _run_configs(args):
     from .cli_options import collect
-    from .families import FAMILIES
+    from .families import family_class, family_names
     from .names import unknown
     from .records import validate_number
     from .run import RunConfig
-    if args.controller not in FAMILIES:
-        raise ValueError(unknown("controller", args.controller, FAMILIES))
+    if args.controller not in family_names():
+        raise ValueError(unknown("controller", args.controller, family_names()))
     params = _params(args.param)
     plugins = _activate_plugins(args)     # before the options: --primitives may name a plugin's
     series = {k: v.split(",") for k, v in params.items() if "," in v}
@@ -273,8 +318,8 @@ def _run_configs(args):
     from .compose.robust import run_setting
     robust = run_setting(args)
     if args.preset:
-        from .gp.presets import apply_preset
-        fam, search = apply_preset(args.preset, args.task, fam, search, args.controller)
+        fam, search = family_class(args.controller).apply_preset(args.preset, args.task, fam,
+                                                                 search)
     if args.figure:
         params["figure"] = _figure_variant(args.task, args.figure)
     values = next(iter(series.values())) if series else [None]
@@ -322,8 +367,8 @@ def cmd_run(args):
             build(cfg)
     dirs = []
     for cfg, out in configs:
-        best, cost, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
-                             artifacts=not args.no_artifacts, backend=_backend(args))
+        _, _, rd = run(cfg, out, force=args.force, resume=args.resume, quiet=args.quiet,
+                       artifacts=not args.no_artifacts, backend=_backend(args))
         dirs.append(rd.path)
         _summary(rd)
     if len(dirs) > 1:
@@ -365,8 +410,8 @@ def cmd_resume(args):
     backend = _backend(args)
     if args.workers is not None or args.scheduler is not None:
         backend.update(workers=args.workers or 0, scheduler=args.scheduler)
-    best, cost, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend,
-                         extend_generations=args.extend_generations)
+    _, _, rd = run(None, args.run_dir, resume=True, quiet=args.quiet, backend=backend,
+                   extend_generations=args.extend_generations)
     _summary(rd)
 
 
@@ -388,7 +433,7 @@ def cmd_replay(args):
     from .compose import playback                       # a composite file: its phases in series
     if playback.is_composite(args.source):
         return playback.replay(args)
-    task, family, actuation, genome, rec = load_controller(args.source)
+    task, family, actuation, genome, _ = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
         import json
@@ -404,9 +449,8 @@ def cmd_replay(args):
         out.mkdir(parents=True, exist_ok=True)
         render_trajectory(traj, out / "filmstrip.png", out / "motion.gif", title=task.name, task=task)
         print(f"  wrote {out / 'filmstrip.png'} and {out / 'motion.gif'}")
-        if family.name == "gp":
-            from .run import plot_gp_trees
-            plot_gp_trees(out / "trees.png", task, family, genome)
+        if family.plot_file:
+            family.plot(out / family.plot_file, genome)
 
 
 def _print_replay(task, family, actuation, traj, costs, measures, ok):
@@ -427,7 +471,7 @@ def cmd_render(args):
     if bool(args.source) == bool(args.figure):
         raise ValueError("render: give a run directory/controller file or --figure NAME (one)")
     if args.figure and args.trees:
-        raise ValueError("--trees needs a GP controller, not --figure")
+        raise ValueError("--trees draws a controller's structure, not a --figure's")
     if args.source and args.seconds is not None:
         raise ValueError("--seconds applies to --figure; a controller runs its task's episode "
                          "(the task's 'seconds' parameter)")
@@ -445,14 +489,11 @@ def cmd_render(args):
         title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from .replay import load_controller, replay_genome
-        task, family, actuation, genome, rec = load_controller(args.source)
+        task, family, actuation, genome, _ = load_controller(args.source)
         traj = replay_genome(task, family, actuation, genome)[0]
         title = f"{task.name} ({family.name})"
         if args.trees:
-            if family.name != "gp":
-                raise ValueError("--trees needs a GP controller")
-            from .run import plot_gp_trees
-            plot_gp_trees(args.trees, task, family, genome)
+            family.plot(args.trees, genome)       # a family with nothing to draw says so
             print(f"wrote {args.trees}")
     render_trajectory(traj, args.output, args.gif, title=title, task=task)
     print(f"wrote {args.output}" + (f" and {args.gif}" if args.gif else ""))
@@ -460,25 +501,28 @@ def cmd_render(args):
 
 def cmd_compare(args):
     from .compare import compare
-    from .families import FAMILIES
+    from .families import family_class, family_names
+    from .names import unknown
     from .records import validate_number
     ctrls = [c.strip() for c in args.controllers.split(",") if c.strip()]
     for c in ctrls:
-        if c not in FAMILIES:
-            raise ValueError(f"--controllers: unknown {c!r}; known: {', '.join(FAMILIES)}")
+        if c not in family_names():
+            raise ValueError(f"--controllers: {unknown('controller', c, family_names())}")
     validate_number("--seeds", args.seeds, lo=1, hi=1000, integer=True)
     validate_number("--budget", args.budget, lo=10, hi=10**9, integer=True)
-    if args.population is not None and "gp" not in ctrls:
-        raise ValueError("--population does not apply: it is the GP population size and "
-                         "--controllers has no gp")
-    population = validate_number("--population", 100 if args.population is None else args.population,
-                                 lo=2, hi=10**6, integer=True)
+    with_population = [c for c in ctrls if family_class(c).takes_population]
+    if args.population is not None and not with_population:
+        raise ValueError(f"--population does not apply: no family in --controllers has a "
+                         f"population (those with one: "
+                         f"{', '.join(n for n in family_names() if family_class(n).takes_population)})")
+    population = validate_number("--population", args.population, lo=2, hi=10**6, integer=True,
+                                 allow_none=True)
     out = args.out or f"runs/compare-{args.task}"
     _activate_plugins(args)
-    rows, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
-                       params=_params(args.param), population=population,
-                       workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
-                       force=args.force)
+    _, md = compare(args.task, ctrls, args.seeds, args.budget, out, actuation=args.actuation,
+                    params=_params(args.param), population=population,
+                    workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
+                    force=args.force)
     print(md)
     print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
 
@@ -492,7 +536,7 @@ def cmd_export(args):
     from .compose import playback
     if playback.is_composite(args.source):
         return playback.export_command(args)
-    task, family, actuation, genome, rec = load_controller(args.source)
+    task, family, actuation, genome, _ = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)
     print(f"wrote {args.bvh}: {len(traj.figure.body_names)} joints, {n} frames at "
@@ -502,25 +546,24 @@ def cmd_export(args):
 
 
 def cmd_check(args):
-    from .check import check_primitive, check_task
+    from .check import check_family, check_primitive, check_task
+    from .families import family_names
     from .gp import primitives
     from .task import task_ids
     if args.only_plugins and not args.plugins:
         raise ValueError("--only-plugins needs --plugins DIR")
     primitives.load_builtin()
-    prims_before, tasks_before = set(primitives.names()), set(task_ids())
+    before = set(primitives.names()) | set(task_ids()) | set(family_names())
     _activate_plugins(args)
-    prims, tasks = primitives.names(), task_ids()       # every version of every task
+    checks = ([("primitive", n, check_primitive) for n in primitives.names()]
+              + [("task", n, check_task) for n in task_ids()]       # every version of every task
+              + [("family", n, check_family) for n in family_names()])
     if args.only_plugins:
-        prims = [n for n in prims if n not in prims_before]
-        tasks = [n for n in tasks if n not in tasks_before]
-        if not prims and not tasks:
-            raise ValueError(f"{', '.join(args.plugins)}: no primitives or tasks to check")
-    bad = 0
-    for name in prims:
-        bad += _report(f"primitive {name}", check_primitive, name)
-    for name in tasks:
-        bad += _report(f"task {name}", check_task, name)
+        checks = [c for c in checks if c[1] not in before]
+        if not checks:
+            raise ValueError(f"{', '.join(args.plugins)}: no primitives, tasks or controller "
+                             "families to check")
+    bad = sum(_report(f"{kind} {name}", fn, name) for kind, name, fn in checks)
     return 1 if bad else 0
 
 

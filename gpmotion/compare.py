@@ -1,6 +1,8 @@
-"""GP vs BSR on one task, one actuation and one evaluation budget.
+"""Controller families side by side on one task, one actuation and one
+evaluation budget.
 
-Each family runs K seeds; every run gets the same evaluation budget (a
+Each family runs K seeds (its search's settings for the budget are the
+family's ``budget_settings``); every run gets the same evaluation budget (a
 serial search's re-scores of its working set when style terms phase in are
 evaluations too, and come out of the budget).  The table reports each run's
 best controller under the final scoring (every style term at full weight,
@@ -34,27 +36,20 @@ from .families import make_family
 from .plugins import loaded as loaded_plugins
 from .records import atomic_write_json, atomic_write_text, envelope
 from .replay import replay_genome
-from .search.adapters import make_search, serial_generations
 from .task import get_task, task_id
-
-
-def _search_opts(family: str, budget: int, population: int, task=None):
-    if family == "gp":
-        pop = min(population, budget)
-        return {"population": pop, "generations": max(1, budget // pop - 1)}
-    gens = max(1, budget // 10 - 1) if task is None else serial_generations(task, budget, 10)
-    return {"n_working": 10, "n_generations": gens}
 
 
 def _nan(x):
     return float("nan") if x is None else float(x)
 
 
-def run_one(task, family_name, seed, budget, actuation, population, workers=0, scheduler=None,
-            family_options=None):
-    """One search; returns a dict with the curve and the final numbers."""
+def run_one(task, family_name, seed, budget, actuation, population=None, workers=0,
+            scheduler=None, family_options=None):
+    """One search; returns a dict with the curve and the final numbers.
+    ``population``: for families whose search has one (None: the family's default)."""
     fam = make_family(family_name, task, **(family_options or {}).get(family_name, {}))
-    search = make_search(fam, seed, **_search_opts(family_name, budget, population, task))
+    search = fam.make_search(seed, **fam.budget_settings(
+        budget, population if fam.takes_population else None))
     ev = make_evaluator(task, fam, workers=workers, scheduler=scheduler, actuation=actuation)
     evals, curve, current, progress, first_success = 0, [], [], [], None
     t0 = time.perf_counter()
@@ -189,7 +184,7 @@ def plot_curves(path, series, task, window, window_evals, actuation):
     ax.set_ylabel("best cost so far, final weights\n(lower is better" + (", log scale)" if log else ")"))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(f"{task.name}: GP vs BSR ({actuation})")
+    ax.set_title(f"{task.name}: {' vs '.join(map(str, series))} ({actuation})")
     if task.curriculum:
         ax.text(0.01, 0.01, "curriculum: earlier evaluations ran in an easier scene, so the\n"
                 "final-weight cost is known only once the final scene is reached",
@@ -224,7 +219,7 @@ def aggregate_lines(runs) -> list[str]:
 
 
 def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", params=None,
-            population=100, workers=0, scheduler=None, family_options=None, quiet=False,
+            population=None, workers=0, scheduler=None, family_options=None, quiet=False,
             force=False):
     task = get_task(task_name, **(params or {}))
     out = check_out_dir(out, force)

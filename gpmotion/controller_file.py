@@ -6,11 +6,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .families import Family, make_family
+from .families import DEFAULT_FAMILY, Family, make_family
 from .task import Task, get_task
 
 
-def save_controller(path: str | Path, task: Task | str, genome, *, family: Family | str = "gp",
+def save_controller(path: str | Path, task: Task | str, genome, *, family: Family | str = DEFAULT_FAMILY,
                     actuation: str | None = None, seed: int = 0, plugins=()) -> dict:
     """Write ``genome`` to ``path`` (the best.json format) and return the record.
 

@@ -1,7 +1,7 @@
 """Evaluators beyond one process: a process pool and a Dask cluster.
 
 Every evaluator exposes the same small interface as
-:class:`gpmotion.evaluate.InProcessEvaluator`::
+:class:`gpmotion.inprocess.InProcessEvaluator`::
 
     ev = make_evaluator(task, family, workers=4)          # or scheduler="local"
     result = ev.evaluate(genomes, progress=0.5)           # -> Evaluation, in genome order
@@ -9,7 +9,7 @@ Every evaluator exposes the same small interface as
     ev.close()                                            # or use ``with``
 
 Genomes leave this process as JSON-safe plain data (``family.to_json``);
-workers rebuild the evaluator from :func:`gpmotion.evaluate.spec_of` (cached
+workers rebuild the evaluator from :func:`gpmotion.inprocess.spec_of` (cached
 per process) and run the same numba rollout with one thread each.  Each
 episode is simulated independently and deterministically, so the chunked,
 reassembled result is bitwise identical to the in-process one, on any
@@ -50,11 +50,12 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
-from .evaluate import Evaluation, InProcessEvaluator, evaluate_chunk, spec_of
+from .evaluation import Evaluation
+from .inprocess import InProcessEvaluator, evaluate_chunk, spec_of
 
 __all__ = ["ProcessPoolEvaluator", "DaskEvaluator", "make_evaluator", "check_scheduler",
            "chunk_bounds", "plan_chunk_size", "usable_workers", "WorkerLost", "SchedulerLost",
-           "DASK_MISSING", "EXIT_SCHEDULER_LOST"]
+           "DaskMissing", "DASK_MISSING", "EXIT_SCHEDULER_LOST"]
 
 DASK_MISSING = "the dask backend needs `pip install gpmotion[dask]`"
 
@@ -84,6 +85,12 @@ IDLE_POLL = 5.0
 
 class WorkerLost(RuntimeError):
     """Workers kept dying: the batch could not be finished within the retry budget."""
+    exit_code = 2
+
+
+class DaskMissing(ImportError):
+    """The dask backend is not installed (a setup problem: one line, exit 2)."""
+    exit_code = 2
 
 
 class SchedulerLost(RuntimeError):
@@ -204,7 +211,7 @@ def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool 
     if parent_pid is not None:
         _die_with_parent(parent_pid, kernel_signal)
     _limit_threads()
-    from .evaluate import evaluator_from_spec
+    from .inprocess import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
 
 
@@ -219,7 +226,7 @@ def _run_chunk(spec: dict, genomes_json: list, progress: float, generation: int 
 def _warm_worker(spec: dict) -> int:
     """Dask: limit threads, build the evaluator and compile/load the kernels once."""
     _limit_threads()
-    from .evaluate import evaluator_from_spec
+    from .inprocess import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
     return os.getpid()
 
@@ -404,7 +411,7 @@ def _import_distributed():
     try:
         import distributed
     except ImportError as e:                       # pragma: no cover - depends on the install
-        raise ImportError(DASK_MISSING) from e
+        raise DaskMissing(DASK_MISSING) from e
     return distributed
 
 

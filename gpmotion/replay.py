@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .evaluate import InProcessEvaluator
+from .inprocess import InProcessEvaluator
 from .families import make_family
 from .records import FormatError, read_json
 from .task import get_task, task_id

@@ -21,14 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .inprocess import spec_of
 from .version import __version__
-from .evaluate import spec_of
 from .families import make_family
 from .records import ConfigError, FormatError, validate_number
 from .rundir import RunDir
 from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
-                        search_settings, settings_mismatch)
-from .search.adapters import make_search
+                        settings_mismatch)
 from .task import Task, get_task, task_id
 
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
@@ -57,26 +56,13 @@ def build(cfg: RunConfig):
         family = make_family(cfg.family, task, **cfg.family_options)
         from .compose.robust import normalize
         cfg.robust = normalize(cfg.robust, task)     # the figure's default sizes filled in
-        search = make_search(family, cfg.seed, **_search_options(cfg, task))
+        noisy = family.noisy_settings() if cfg.robust else {}   # new starts each generation
+        given = {k: v for k, v in cfg.search.items() if v is not None}
+        search = family.make_search(cfg.seed, **{**noisy, **given})
     except TypeError as e:           # an option the constructor does not take
         raise ConfigError(f"{cfg.task} ({cfg.family}): {e}") from None
     actuation = cfg.actuation or family.default_actuation
     return task, family, search, actuation
-
-
-def _search_options(cfg: RunConfig, task: Task) -> dict:
-    """cfg.search, with GP's ring-migration size fitted to small islands (the
-    user cannot set ``migrants``; its default 2 needs islands of 4)."""
-    opts = {k: v for k, v in cfg.search.items() if v is not None}
-    if cfg.robust and cfg.family == "gp":     # new starts each generation: costs never carry over
-        opts.setdefault("reuse_costs", False)
-    if cfg.family == "gp" and "migrants" not in opts:
-        from .search.adapters import GP_DEFAULTS
-        pop = opts.get("population", task.gp_defaults.get("population", GP_DEFAULTS["population"]))
-        islands = opts.get("islands", 1)
-        if isinstance(pop, int) and isinstance(islands, int) and islands >= 1:
-            opts["migrants"] = min(2, pop // islands // 2)
-    return opts
 
 
 def _evaluator(cfg, task, family, actuation, backend=None):
@@ -148,8 +134,7 @@ def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDi
 
 def phase_line(task: Task, search) -> str:
     """The style-term phase-in schedule in generations, one short line."""
-    n = getattr(search, "schedule", None) or search.total
-    sched = max(1, n - 1 if search.kind == "gp" else n)       # progress = generation / sched
+    sched = search.progress_span                         # progress ≈ generation / sched
     phased = [t for t in task.terms if t.phase[1] > t.phase[0]]
     parts = [f"{t.name} {round(t.phase[0] * sched)}→{round(t.phase[1] * sched)}" for t in phased]
     parts += [f"{k} from {e.start:g} {round(e.phase[0] * sched)}→{round(e.phase[1] * sched)}"
@@ -161,8 +146,8 @@ def phase_line(task: Task, search) -> str:
 
 # ------------------------------------------------------------------ the loop
 
-def _log_row(search, ev, evals_total: int, elapsed: float) -> dict:
-    row = search.row(ev)
+def _log_row(search, evals_total: int, elapsed: float) -> dict:
+    row = search.row()
     return {"generation": row.pop("generation"), "evaluations": evals_total, **row,
             "evals_per_s": round(evals_total / elapsed, 1) if elapsed > 0 else "",
             "elapsed_s": round(elapsed, 3)}
@@ -341,7 +326,7 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
     elapsed = validate_number(f"{where}: elapsed_s", ck.get("elapsed_s", 0.0), lo=0, hi=1e9)
     state = ck.get("search")
     cfg_ck = state.get("config") if isinstance(state, dict) else None
-    bad = settings_mismatch(search_settings(search), cfg_ck, search.total_key,
+    bad = settings_mismatch(search.config(), cfg_ck, search.total_key,
                             {original, total or original})
     if bad:
         raise FormatError(f"{where}: search settings differ from config.json ({bad}); "
@@ -354,7 +339,7 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
     search.extend(total or original, original)
     rd.trim_log(n_rows)
     rows = rd.read_log()
-    last = search.generation - (search.kind == "gp")      # GP rows name the generation told
+    last = search.logged_generation()
     if rows and (rows[-1].get("evaluations") != str(evals)
                  or rows[-1].get("generation") != str(last)):
         raise FormatError(f"{rd.log_path}: its row {n_rows} does not end at the checkpoint "
@@ -366,7 +351,6 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
 
 def _check_state(search, evals: int, where: str) -> None:
     """The restored search agrees with the checkpoint's counts and its own settings."""
-    s = search.search
     if search.evaluations != evals:
         raise FormatError(f"{where}: evaluations {evals} ≠ the search state's "
                           f"{search.evaluations}")
@@ -375,15 +359,10 @@ def _check_state(search, evals: int, where: str) -> None:
     if not 0 <= search.generation <= search.total:
         raise FormatError(f"{where}: generation {search.generation} is outside "
                           f"0..{search.total}")
-    if search.kind == "gp":
-        sizes = [("population", len(s.population), s.population_size)]
-    else:
-        n = None if s.working is None else len(s.working)
-        sizes = [("working set", n, s.n_working if n is not None else None),
-                 ("scores", None if s.scores is None else len(s.scores), n)]
-    for what, have, want in sizes:
-        if have != want:
-            raise FormatError(f"{where}: its {what} has {have} entries, the settings say {want}")
+    try:
+        search.check_restored()
+    except ValueError as e:
+        raise FormatError(f"{where}: {e}") from None
 
 
 def _checked_identity(doc: dict, rd: RunDir) -> dict:
@@ -424,7 +403,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             ev = evaluator.evaluate(genomes, search.progress, generation=search.generation)
             told = False
             search.tell(ev)
-            row = _log_row(search, ev, rec.evals + len(genomes), time.perf_counter() - t0)
+            row = _log_row(search, rec.evals + len(genomes), time.perf_counter() - t0)
             rec.add(row)
             told = True
             done_now += 1
@@ -490,17 +469,11 @@ def write_artifacts(rd: RunDir, task, family, genome, traj):
     from . import render
     render_trajectory(traj, rd.artifact("filmstrip.png"), rd.artifact("motion.gif"),
                       title=f"{task.name} ({family.name})", task=task)
-    if family.name == "gp":
-        plot_gp_trees(rd.artifact("trees.png"), task, family, genome)
+    if family.plot_file:
+        family.plot(rd.artifact(family.plot_file), genome)
     rows = rd.read_log()
     if rows:
         render.run_curve(rd.artifact("curve.png"), rows, task, title=f"{task.name} ({family.name})")
-
-
-def plot_gp_trees(path, task, family, genome):
-    from .treeplot import plot_trees
-    names = [task.figure.actuator_names[i] for i in family.actuators]
-    plot_trees(path, family.to_json(genome)["trees"], titles=names, suptitle=f"{task.name} (gp)")
 
 
 def render_trajectory(traj, filmstrip=None, gif=None, title=None, e: int = 0, task=None):

@@ -8,12 +8,12 @@ A hand-edited config gives one line naming the field, never a traceback;
 from __future__ import annotations
 
 import hashlib
-import inspect
 import json
 import secrets
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .families import DEFAULT_FAMILY
 from .records import ConfigError, FormatError
 
 
@@ -21,7 +21,7 @@ from .records import ConfigError, FormatError
 class RunConfig:
     """Everything that fixes a run (written to config.json)."""
     task: str
-    family: str = "gp"
+    family: str = DEFAULT_FAMILY
     seed: int = 0
     params: dict = field(default_factory=dict)          # task parameters
     family_options: dict = field(default_factory=dict)  # rules, t_per, primitives...
@@ -56,10 +56,10 @@ class RunConfig:
             raise FormatError(f"{source}: run lacks {missing}")
         for k, v in d.items():
             _check_type(source, f"run.{k}", v, _TYPES[k])
-        from .families import FAMILIES
-        if d["family"] not in FAMILIES:
+        from .families import family_names
+        if d["family"] not in family_names():
             raise FormatError(f"{source}: run.family {_short(d['family'])} is not one of "
-                              f"{', '.join(FAMILIES)}")
+                              f"{', '.join(family_names())}")
         for k, v in d.get("params", {}).items():     # a figure variant is an object
             _check_type(source, f"run.params.{k}", v, (str, int, float, bool, dict))
         for k, v in d.get("family_options", {}).items():
@@ -91,12 +91,8 @@ def _check_type(source: str, where: str, v, types: tuple) -> None:
 
 def search_keys(family: str) -> set[str]:
     """The search settings a config may set for a family."""
-    if family == "gp":
-        from .search.gp import GPSearch
-        return set(inspect.signature(GPSearch).parameters) - {"family", "seed"}
-    from .search.serial import SerialSearch
-    return set(inspect.signature(SerialSearch).parameters) - {
-        "init_fn", "mutate_fn", "rng", "maximize", "genome_to_json", "genome_from_json"}
+    from .families import family_class
+    return family_class(family).setting_names()
 
 
 def _check_search(source: str, family: str, search: dict) -> None:
@@ -127,12 +123,6 @@ def config_digest(doc: dict) -> str:
             if k not in ("format", "version", "extended_generations")}
     text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def search_settings(adapter) -> dict:
-    """The search's effective settings, as its checkpoints record them."""
-    s = adapter.search
-    return s.config() if hasattr(s, "config") else s.state_dict()["config"]
 
 
 def _same(a, b) -> bool:
@@ -196,7 +186,7 @@ def check_resume_request(given: RunConfig, stored: RunConfig, doc: dict, search,
     for k, v in given.family_options.items():
         if not _same(v, fam.get(k)):
             refuse(_flag(k), fam.get(k), v)
-    eff = search_settings(search)
+    eff = search.config()
     for k, v in given.search.items():
         if v is not None and not _same(v, eff.get(k, stored.search.get(k))):
             refuse(_flag(k), eff.get(k, stored.search.get(k)), v)

@@ -31,17 +31,20 @@ from gpmotion.task import Task
 RECORD_EVERY = 20
 
 
-def creature_measures(traj, feet, foot_sites=(), foot_groups=()) -> dict[str, np.ndarray]:
+def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX_TILT,
+                      min_height=s3.MIN_HEIGHT) -> dict[str, np.ndarray]:
     """Every term above for a batch.  ``feet``: the foot contact points' names
     (any other point on the ground means a fall); ``foot_sites``: a site per
-    foot; ``foot_groups``: for a biped, the contact points of each foot."""
+    foot; ``foot_groups``: for a biped, the contact points of each foot;
+    ``max_tilt`` (rad), ``min_height`` (fraction): the fall thresholds."""
     fig = traj.figure
     base = traj.base()
     quat = base[..., 3:7]
     yaw = s3.heading(quat)
     d = s3.in_start_frame(traj.com[..., :2], yaw[..., 0])
     other = [k for k, n in enumerate(fig.contact_names) if n not in feet]
-    fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other])
+    fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other],
+                     max_tilt, min_height)
     out = {"distance": d[..., -1, 0], "sideways": np.abs(d[..., -1, 1]),
            "fall": s3.fall_fraction(fell), "rotation": s3.net_rotation(yaw),
            "turn": s3.net_rotation(yaw), "fell": fell[..., -1].astype(np.float64)}
@@ -61,8 +64,19 @@ class CreatureTask(Task):
     feet: tuple[str, ...] = ()
     foot_sites: tuple[str, ...] = ()
     foot_groups: tuple[tuple[str, ...], ...] = ()
+    max_tilt = s3.MAX_TILT          # fallen: root tilted further (rad) ...
+    min_height = s3.MIN_HEIGHT      # ... or com below this fraction of its start height
     record_every = RECORD_EVERY
     _start = None
+
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        self.terms = self.make_terms(self.params)   # weights are parameters (validate() stays pure)
+
+    @classmethod
+    def make_terms(cls, params):
+        """The score terms under these parameter values (default: the class's)."""
+        return cls.terms
 
     def validate(self):
         after = self.params.get("after", "")
@@ -78,7 +92,8 @@ class CreatureTask(Task):
         return q.copy(), qd.copy()
 
     def measure(self, traj):
-        return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups)
+        return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups,
+                                 self.max_tilt, self.min_height)
 
     def terminal_names(self) -> list[str]:
         """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):

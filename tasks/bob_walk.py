@@ -6,6 +6,8 @@ vertical axis (penalized; the last "to encourage more conventional
 forward-facing walking").  Solved: ≥ 5 forward steps (a foot touching down
 ahead of the other) before falling, facing within 45° of the start heading.
 """
+import numpy as np
+
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._creature3d import CreatureTask
 
@@ -26,6 +28,8 @@ class BobWalk(CreatureTask):
     feet = ("foot_l", "foot_r")
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (("foot_l",), ("foot_r",))
+    max_tilt = np.radians(45.0)     # Bob's pelvis tilted 45° or his com 30 % lower: fallen
+    min_height = 0.7
     params = {"seconds": 4.0, "success_steps": 5.0, "w_feet": 0.5, "w_sideways": 0.5, "w_fall": 2.0,
               "w_rotation": 0.3, "after": ""}
     param_docs = {"seconds": "episode length (s)",
@@ -38,9 +42,9 @@ class BobWalk(CreatureTask):
     terms = bob_terms(params)
     success_threshold = "≥ 5 forward steps before falling, facing forward"
 
-    def validate(self):
-        super().validate()
-        self.terms = bob_terms(self.params)
+    @classmethod
+    def make_terms(cls, params):
+        return bob_terms(params)
 
     def success(self, traj, m):
         return m["steps"] >= self.params["success_steps"]

@@ -37,9 +37,9 @@ class CujoTravel(CreatureTask):
              Term("fall", 0.0, doc="fraction of the episode fallen"))
     success_threshold = "com ≥ one body length (0.6 m) forward, upright at the end"
 
-    def validate(self):
-        super().validate()
-        self.terms = (self.terms[0], Term("fall", float(self.params["w_fall"]), doc=self.terms[1].doc))
+    @classmethod
+    def make_terms(cls, params):
+        return (cls.terms[0], Term("fall", float(params["w_fall"]), doc=cls.terms[1].doc))
 
     def measure(self, traj):
         m = super().measure(traj)

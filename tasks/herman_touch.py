@@ -31,7 +31,6 @@ LEFT_ARM = ("shoulder_l_y", "shoulder_l_z", "shoulder_l_x", "elbow_l", "wrist_l_
 LEG_LINKS = ("hip_", "knee_", "ankle_")     # links are named by their joint
 ARM_LENGTH = 0.77       # m: shoulder to fingertip, arm straight
 WAIST_TRAVEL = 0.50     # m: how far the shoulder moves as the waist bends 1.2 rad
-# reach() starts: hand at the face, in front of the chest, down by the thigh
 
 
 def fingertip_distance(traj, site):
@@ -44,8 +43,6 @@ def reach_site(fig, site, joints, starts):
     body (both through forward kinematics), over ``joints`` within their limits;
     the best of a few least-squares starts."""
     from scipy.optimize import least_squares
-
-    from gpmotion.sim import geometry3d
     m = fig.model
     idx = [fig.actuator_names.index(n) for n in joints]
     lo, hi = m.lo[m.act_dof[idx]], m.hi[m.act_dof[idx]]
@@ -82,8 +79,9 @@ def joints_for(fig, site: str) -> tuple[str, ...]:
                                - rest[fig.site_names.index("shoulder_r")]))
     bound = ARM_LENGTH + extra
     if far > bound:
+        how = "" if joints == ARM else f" with {', '.join(j for j in joints if j not in ARM)} under GP"
         raise ValueError(f"herman_touch: site {site!r} is {far:.2f} m from the right shoulder; the "
-                         f"fingertip reaches {bound:.2f} m{'' if joints == ARM else ' (' + ', '.join(joints[:3]) + ' ... under GP)'}")
+                         f"fingertip reaches {bound:.2f} m{how}")
     return joints
 
 

@@ -8,8 +8,8 @@ from gpmotion.model import make_scene
 from gpmotion.task import Term, register_task
 from gpmotion.tasks.lamp3d_hop import (GROUND, LAMP3D_DOCS, LAMP3D_PARAMS, Lamp3DHop,
                                        count_hops3d, hop3d_measures)
-from gpmotion.tasks.lamp_hop import ARRIVED, HOP_TERMS
-from gpmotion.tasks.lamp_limbo import POLE_RADIUS, LampLimbo
+from gpmotion.tasks.lamp_hop import HOP_TERMS
+from gpmotion.tasks.lamp_limbo import POLE_RADIUS, LampLimbo, limbo_success, with_pole
 
 
 @register_task
@@ -34,13 +34,10 @@ class Lamp3DLimbo(Lamp3DHop):
         return make_scene(goal=(self.params["distance"], 0.0, 0.0), poles=[pole], **GROUND)
 
     def measure(self, traj):
-        m = hop3d_measures(self, traj)
-        pen = traj.pole_hit.max(axis=1)
-        m["pole"] = (pen > 0).astype(float) + 100.0 * pen
-        return m
+        return with_pole(hop3d_measures(self, traj), traj)
 
     def success(self, traj, m):
-        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0) & (m["head_hit"] == 0)
+        return limbo_success(m)
 
     def describe(self, traj, m):
         return [f"hops: {count_hops3d(traj)}", f"pole {'touched' if m['pole'][0] else 'clear'}",

@@ -14,6 +14,17 @@ from gpmotion.tasks.lamp_hop import (ARRIVED, HOP_TERMS, PAPER_TERMINALS, count_
 POLE_RADIUS = 0.01
 
 
+def with_pole(m, traj):
+    """The measures plus "pole": touched it (+ 100 × deepest penetration in m)."""
+    pen = traj.pole_hit.max(axis=1)
+    m["pole"] = (pen > 0).astype(float) + 100.0 * pen
+    return m
+
+
+def limbo_success(m):
+    return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0) & (m["head_hit"] == 0)
+
+
 @register_task
 class LampLimbo(Task):
     name = "lamp_limbo"
@@ -63,13 +74,10 @@ class LampLimbo(Task):
         return make_scene(goal=(self.params["distance"], 0.0), poles=[pole])
 
     def measure(self, traj):
-        m = hop_measures(self, traj)
-        pen = traj.pole_hit.max(axis=1)
-        m["pole"] = (pen > 0).astype(float) + 100.0 * pen
-        return m
+        return with_pole(hop_measures(self, traj), traj)
 
     def success(self, traj, m):
-        return (m["distance"] < ARRIVED) & (m["fell"] == 0) & (m["pole"] == 0) & (m["head_hit"] == 0)
+        return limbo_success(m)
 
     def describe(self, traj, m):
         return [f"hops: {count_hops(traj)}", f"pole {'touched' if m['pole'][0] else 'clear'}",

@@ -8,8 +8,7 @@ Solved: heading changed by ≥ 45° without falling.
 import numpy as np
 
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._creature3d import CreatureTask
-from gpmotion.tasks.rex_walk import FEET
+from gpmotion.tasks.rex_walk import RexTask
 
 
 def turn_terms(p):
@@ -19,25 +18,18 @@ def turn_terms(p):
 
 
 @register_task
-class RexTurn(CreatureTask):
+class RexTurn(RexTask):
     name = "rex_turn"
-    figure = "rex"
     description = "Rex turns (changes heading) without falling"
-    feet = FEET
-    foot_sites = ("foot_l", "foot_r")
-    foot_groups = (FEET[:4], FEET[4:])
     params = {"seconds": 3.0, "success_degrees": 45.0, "w_sideways": 0.2, "w_fall": 10.0, "after": ""}
-    param_docs = {"seconds": "episode length (s)",
-                  "success_degrees": "heading change that counts as solved (°)",
-                  "w_sideways": "penalty per m of sideways com motion",
-                  "w_fall": "penalty for falling (× fraction of the episode fallen)",
-                  "after": "start from the end of these saved controllers (comma-separated files)"}
+    param_docs = {**RexTask.param_docs,
+                  "success_degrees": "heading change that counts as solved (°)"}
     terms = turn_terms(params)
     success_threshold = "heading changes ≥ 45°, never fallen"
 
-    def validate(self):
-        super().validate()
-        self.terms = turn_terms(self.params)
+    @classmethod
+    def make_terms(cls, params):
+        return turn_terms(params)
 
     def success(self, traj, m):
         return (m["turn"] >= np.radians(self.params["success_degrees"])) & (m["fall"] == 0)

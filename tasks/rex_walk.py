@@ -7,6 +7,8 @@ fallen), all in the frame Rex starts in.  With ``after`` (the walk's and the
 turn's controllers) this is the third stage of walk → turn → walk.
 Solved: ≥ 1 m forward without falling.
 """
+import numpy as np
+
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._creature3d import CreatureTask
 
@@ -19,26 +21,33 @@ def walk_terms(p):
             Term("fall", float(p["w_fall"]), doc="fraction of the episode fallen"))
 
 
-@register_task
-class RexWalk(CreatureTask):
-    name = "rex_walk"
+class RexTask(CreatureTask):
+    """What Rex's tasks share: his figure, feet and fall test."""
     figure = "rex"
-    description = "Rex (15 rods, 10 free angles) walks forward without falling"
     feet = FEET
     foot_sites = ("foot_l", "foot_r")
     foot_groups = (FEET[:4], FEET[4:])
-    params = {"seconds": 3.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 10.0, "after": ""}
+    max_tilt = np.radians(30.0)     # Rex's trunk pitched 30° or his com 25 % lower: fallen
+    min_height = 0.75               # (at 60°/50 % a search walked by falling slowly forward)
     param_docs = {"seconds": "episode length (s)",
-                  "success_distance": "com travel that counts as solved (m)",
                   "w_sideways": "penalty per m of sideways com motion",
                   "w_fall": "penalty for falling (× fraction of the episode fallen)",
                   "after": "start from the end of these saved controllers (comma-separated files)"}
+
+
+@register_task
+class RexWalk(RexTask):
+    name = "rex_walk"
+    description = "Rex (15 rods, 10 free angles) walks forward without falling"
+    params = {"seconds": 3.0, "success_distance": 1.0, "w_sideways": 0.5, "w_fall": 10.0, "after": ""}
+    param_docs = {**RexTask.param_docs,
+                  "success_distance": "com travel that counts as solved (m)"}
     terms = walk_terms(params)
     success_threshold = "com ≥ 1 m forward, never fallen"
 
-    def validate(self):
-        super().validate()
-        self.terms = walk_terms(self.params)
+    @classmethod
+    def make_terms(cls, params):
+        return walk_terms(params)
 
     def success(self, traj, m):
         return (m["distance"] >= self.params["success_distance"]) & (m["fall"] == 0)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.search.gp import GPSearch
 from gpmotion.task import get_task
@@ -34,8 +34,10 @@ def test_bsr_genome_has_parameters_for_the_driven_joints_only(task):
         assert np.array_equal(g.limits, task.figure.actuator_limits()[driven])
         assert fam.from_json(fam.to_json(g)).n_act == 6
         ci = fam.encode([g]).ci[0]
-        head = 3 if name == "bsr-time" else 3 + len(fam.sense_indices)   # time: [R, n_act, variable]
-        assert list(ci[head:head + 6]) == driven
+        if name == "bsr-time":                   # [R, n_act, variable, actuator map, ...]
+            assert list(ci[3:9]) == driven
+        else:                                    # 3-D sense kernel: the map ends the program
+            assert list(ci[-6:]) == driven       # (gpmotion/bsr/sense3d_kernel.py)
 
 
 @pytest.mark.parametrize("actuation", ["kinematic", "pd"])

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from gpmotion.compare import compare, phase_window, replot
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.replay import load_controller, replay_genome
-from gpmotion.search.adapters import make_search, serial_generations
+from gpmotion.search.serial import serial_generations, serial_rescores
 from gpmotion.task import get_task
 
 SHORT = {"seconds": 0.3}
@@ -21,7 +21,7 @@ def _drive(search, ev):
     while not search.done:
         result = ev.evaluate(search.ask(), search.progress)
         search.tell(result)
-        rows.append(search.row(result))
+        rows.append(search.row())
     return rows
 
 
@@ -31,10 +31,9 @@ def test_serial_working_set_holds_final_weight_scores():
     evaluated under it (the old search kept costs from progress 0)."""
     task = get_task("lamp_hop", **SHORT)
     fam = make_family("bsr-time", task)
-    search = make_search(fam, 0, n_working=4, n_generations=30, phase_steps=6)
+    s = search = fam.make_search(0, n_working=4, n_generations=30, phase_steps=6)
     ev = InProcessEvaluator(task, fam, "pd")
     rows = _drive(search, ev)
-    s = search.search
     full = ev.evaluate(list(s.working) + [s.best_genome, search.best], 1.0).costs
     assert np.array_equal(full[:4], s.scores)
     assert full[4] == s.best_score == min(s.scores.min(), full[4])
@@ -48,7 +47,7 @@ def test_serial_working_set_holds_final_weight_scores():
 def test_gp_rows_carry_current_and_final_best():
     task = get_task("lamp_hop", **SHORT)
     fam = make_family("gp", task)
-    search = make_search(fam, 1, population=12, generations=8)
+    search = fam.make_search(1, population=12, generations=8)
     ev = InProcessEvaluator(task, fam, "pd")
     rows = _drive(search, ev)
     finals = [r["best_final"] for r in rows]
@@ -61,7 +60,7 @@ def test_gp_rows_carry_current_and_final_best():
 def test_curriculum_final_best_unknown_until_final_scene():
     task = get_task("lamp_limbo", seconds=0.3)
     fam = make_family("bsr-time", task)
-    search = make_search(fam, 0, n_working=3, n_generations=20, phase_steps=5)
+    search = fam.make_search(0, n_working=3, n_generations=20, phase_steps=5)
     ev = InProcessEvaluator(task, fam, "pd")
     rows = _drive(search, ev)
     unknown = [r for r in rows if r["best_final"] == ""]
@@ -73,7 +72,6 @@ def test_curriculum_final_best_unknown_until_final_scene():
 def test_serial_budget_counts_rescores():
     task = get_task("lamp_hop")
     g = serial_generations(task, 3000, 10)
-    from gpmotion.search.adapters import serial_rescores
     used = 10 * (1 + g) + 11 * serial_rescores(task, g, 20)
     assert used <= 3000 < used + 10 + 11
 

@@ -282,3 +282,17 @@ def test_replay_render_and_export_take_a_composite(ctrl_dir, tmp_path, capsys):
     assert main(["replay", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "phases" in err[0]
+
+
+def test_the_example_cartwheel_is_of_the_current_figure_and_turns_whole():
+    """The old example carried the legs' pre-widening range [-1.2, 0.4] in its genome (a
+    time-based genome keeps the ranges it was drawn in) and could only tip 0.80 of a turn."""
+    from pathlib import Path
+
+    from gpmotion.replay import load_controller, replay_genome
+    path = Path(__file__).resolve().parents[1] / "examples" / "composite" / "cartwheel.json"
+    task, fam, act, genome, _ = load_controller(path)
+    m = task.figure.model
+    assert fam.to_json(genome)["limits"] == [[float(m.lo[i]), float(m.hi[i])] for i in m.act_dof]
+    _, _, measures, _ = replay_genome(task, fam, act, genome)
+    assert measures["rotations"][0] >= 1.0

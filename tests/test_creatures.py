@@ -10,6 +10,8 @@ from gpmotion.bsr import contain, secondary3d as s3, senses3d
 from gpmotion.bsr.genome import random_sense_genome, random_time_genome
 from gpmotion.bsr.mutation import relevant_stimulus
 from gpmotion.controllers import schedule
+from gpmotion.inprocess import InProcessEvaluator
+from gpmotion.families import make_family
 from gpmotion.figures import load_figure, load_spec
 from gpmotion.sim import spatial3d as K
 from tests.reference import spatial3d_ref as ref
@@ -27,6 +29,7 @@ def n_rods(fig):
 @pytest.mark.parametrize("name, rods, free", [("cujo", 7, 9), ("rex", 15, 10), ("bob", 9, 10)])
 def test_creatures_have_the_papers_rods_and_free_angles(name, rods, free):
     fig = load_figure(name)
+    assert fig.name == name                       # (a body loop once shadowed the name)
     assert n_rods(fig) == rods and len(fig.actuator_names) == free
     slots = 2 * (rods - 1)                        # θ and ψ per joint (Fig. 6)
     fixed = slots - free
@@ -143,7 +146,7 @@ def test_creatures_stand_under_kinematic_joints_except_bob(name):
 def test_rex_time_based_controller_has_47_free_variables():
     """§4.1: 2NR − 1 = 119 variables for N = 15 rods, R = 4; 47 of them free."""
     task = gpmotion.get_task("rex_walk")
-    fam = gpmotion.families.make_family("bsr-time", task, rules=4, segments="variable")
+    fam = make_family("bsr-time", task, rules=4, segments="variable")
     g = fam.random(np.random.default_rng(0))
     N, R = n_rods(task.figure), 4
     assert 2 * N * R - 1 == 119
@@ -157,7 +160,7 @@ def test_3d_sense_based_rule_size():
     a rule has 2V + n_act + 1 numbers (μ, λ, θ₀, τ)."""
     for name, task in (("bob", "bob_walk"), ("rex", "rex_walk")):
         t = gpmotion.get_task(task)
-        fam = gpmotion.families.make_family("bsr-sense", t, rules=10)
+        fam = make_family("bsr-sense", t, rules=10)
         V = 10 + len(t.figure.contact_names) + len(t.figure.actuator_names)
         assert fam.senses3d.plan.n_senses == V
         g = fam.random(np.random.default_rng(0))
@@ -183,8 +186,8 @@ def test_low_pass_step_response():
 
 def test_sense_kernel_filters_and_selects_as_its_numpy_twin():
     task = gpmotion.get_task("bob_walk", seconds=1.0)
-    fam = gpmotion.families.make_family("bsr-sense", task)
-    ev = gpmotion.evaluate.InProcessEvaluator(task, fam)
+    fam = make_family("bsr-sense", task)
+    ev = gpmotion.inprocess.InProcessEvaluator(task, fam)
     rng = np.random.default_rng(3)
     gs = [fam.random(rng) for _ in range(3)]
     for _ in range(3):                      # contain rules: several rules get to fire
@@ -236,38 +239,24 @@ def test_a_contained_rule_is_a_candidate_at_its_point():
         assert not np.shares_memory(new.mu, g.mu)
 
 
-class _Counter:
-    def __init__(self):
-        self.n = 0
-
-
-def test_enriched_search_starts_from_the_best_of_100_enriched_controllers():
-    rng0 = np.random.default_rng(0)
-    limits = np.array([[-1.0, 1.0]] * 2)
-
-    def init(rng):
-        return random_sense_genome(rng, 4, 3, limits, 0.05, 2.0)
-
-    def score(g):                            # lower is better: θ₀ near 0.5
-        return float(np.abs(g.theta0 - 0.5).sum())
-
-    s = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
-                                     rng=rng0, maximize=False)
-    traj = np.full((5, 3), 0.5)
+def test_3d_bsr_sense_search_starts_from_the_best_of_100_enriched_controllers():
+    task = gpmotion.get_task("bob_walk", seconds=0.2)
+    fam = make_family("bsr-sense", task)
+    s = fam.make_search(0, n_working=10, n_generations=2)
+    assert isinstance(s, contain.EnrichedSerialSearch)
+    ev = InProcessEvaluator(task, fam)
     sizes = []
     while not s.done:
         cand = s.ask()
         sizes.append(len(cand))
-        s.tell([score(g) for g in cand], [traj] * len(cand))
+        s.tell(ev.evaluate(cand))
         if len(sizes) == 2:                  # checkpoint mid-enrichment and resume
-            s2 = contain.EnrichedSerialSearch(init, contain.mutate, n_working=10, n_generations=5,
-                                              rng=np.random.default_rng(9), maximize=False)
+            s2 = fam.make_search(5, n_working=10, n_generations=2)
             s2.load_state_dict(s.state_dict())
             assert s2.round == 1 and len(s2.pool[0]) == 100
-            assert [score(g) for g in s2.ask()] == [score(g) for g in s.ask()]
-    assert sizes == [100, 100, 100, 100] + [10] * 5
-    assert s.evaluations == 450
-    assert s.best_score <= min(s.scores)
+            assert [g.to_dict() for g in s2.ask()] == [g.to_dict() for g in s.ask()]
+    assert sizes == [100, 100, 100, 100, 10, 10]
+    assert s.evaluations == 420 and len(s.working) == 10
 
 
 # ---------------------------------------------------------------- secondary terms
@@ -287,6 +276,11 @@ def test_fallen_and_steps():
     fell = s3.fallen(up, com, np.zeros((5, 0)))
     assert fell.tolist() == [False, False, False, True, True]           # stays fallen
     assert s3.fall_fraction(fell) == pytest.approx(0.4)
+    # Rex's stricter thresholds: a trunk pitched 37° (up_z 0.8) or a com 30 % low has fallen
+    assert s3.fallen(np.array([1.0, 0.8]), np.ones(2), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert s3.fallen(np.ones(2), np.array([1.0, 0.7]), np.zeros((2, 0)), np.radians(30), 0.75)[-1]
+    assert not s3.fallen(np.array([1.0, 0.8]), np.array([1.0, 0.7]), np.zeros((2, 0)))[-1]
+    assert gpmotion.get_task("rex_walk").max_tilt == pytest.approx(np.radians(30))
     # two feet alternate touchdowns, each landing 0.2 m ahead of the other
     force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
     fwd = np.array([[0, 0], [0, 0], [0.2, 0], [0.2, 0], [0.2, 0.4], [0.2, 0.4], [0.6, 0.4]])
@@ -309,9 +303,9 @@ def test_creature_tasks_pass_the_contract_checks(task):
 @pytest.mark.parametrize("family", ["bsr-time", "bsr-sense"])
 def test_bsr_families_score_creature_tasks_deterministically(task, family):
     t = gpmotion.get_task(task, seconds=0.5)
-    fam = gpmotion.families.make_family(family, t)
+    fam = make_family(family, t)
     gs = [fam.random(np.random.default_rng(k)) for k in range(3)]
-    ev = gpmotion.evaluate.InProcessEvaluator(t, fam)
+    ev = InProcessEvaluator(t, fam)
     a, b = ev.evaluate(gs), ev.evaluate(gs)
     assert np.all(np.isfinite(a.costs)) and np.array_equal(a.costs, b.costs)
     if family == "bsr-sense":
@@ -321,14 +315,26 @@ def test_bsr_families_score_creature_tasks_deterministically(task, family):
 def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
     from gpmotion.controller_file import save_controller
     walk = gpmotion.get_task("rex_walk", seconds=0.5)
-    fam = gpmotion.families.make_family("bsr-time", walk, segments="variable", t_per=0.5)
+    fam = make_family("bsr-time", walk, segments="variable", t_per=0.5)
     g = fam.random(np.random.default_rng(2))
     path = tmp_path / "walk.json"
     save_controller(path, walk, g, family=fam)
-    ev = gpmotion.evaluate.InProcessEvaluator(walk, fam)
+    ev = InProcessEvaluator(walk, fam)
     end = ev.rollout([g])
     turn = gpmotion.get_task("rex_turn", after=str(path))
     q0, qd0 = turn.initial_state()
     assert np.allclose(q0, end.q[0, -1]) and np.allclose(qd0, end.qd[0, -1])
     with pytest.raises(ValueError, match="after"):
         gpmotion.get_task("rex_turn", after=str(tmp_path / "missing.json")).initial_state()
+
+
+@pytest.mark.parametrize("name, param", [("rex_walk", "w_fall"), ("rex_turn", "w_sideways"),
+                                         ("cujo_travel", "w_fall"), ("bob_walk", "w_fall")])
+def test_creature_weights_are_parameters_and_validate_is_pure(name, param):
+    """Weights come from the parameters when the task is built; validate() changes nothing."""
+    t = gpmotion.get_task(name, **{param: 7.0})
+    terms = t.terms
+    assert any(x.weight == 7.0 for x in terms)
+    t.params[param] = 1.0
+    t.validate()
+    assert t.terms is terms

@@ -21,7 +21,7 @@ import pytest
 distributed = pytest.importorskip("distributed")
 
 from gpmotion import evaluators  # noqa: E402
-from gpmotion.evaluate import InProcessEvaluator  # noqa: E402
+from gpmotion.inprocess import InProcessEvaluator  # noqa: E402
 from gpmotion.evaluators import DaskEvaluator, SchedulerLost  # noqa: E402
 from gpmotion.families import make_family  # noqa: E402
 from gpmotion.task import get_task  # noqa: E402

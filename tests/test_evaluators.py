@@ -15,7 +15,8 @@ from deap import gp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gpmotion.evaluate import Evaluation, InProcessEvaluator
+from gpmotion.evaluation import Evaluation
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.evaluators import (DASK_MISSING, PRIOR_SECONDS_PER_STEP, DaskEvaluator, ProcessPoolEvaluator, WorkerLost,
                                  check_scheduler, chunk_bounds, make_evaluator, plan_chunk_size)
 from gpmotion.families import make_family

@@ -169,7 +169,12 @@ def _study():
     return mod
 
 
-def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys):
+def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys, monkeypatch):
+    # run_one sets NUMBA_NUM_THREADS=1 unless set (for its own process); here it must keep
+    # numba's value, or every later compile in this process fails ("Cannot set
+    # NUMBA_NUM_THREADS to a different value once the threads have been launched")
+    import numba
+    monkeypatch.setenv("NUMBA_NUM_THREADS", str(numba.config.NUMBA_NUM_THREADS))
     from gpmotion.run import run
     from gpmotion.runconfig import RunConfig
     study = _study()
@@ -204,3 +209,12 @@ def test_study_never_mixes_in_runs_of_other_settings(tmp_path, capsys):
         study.main(["--configs", "tiny", "--seeds", "1", "--first-seed", "3", "--budget", "20",
                     "--out", str(tmp_path)])
     assert e.value.code == 2
+
+
+def test_study_leaves_numba_threads_alone(tmp_path):
+    """run_one in a process with running numba threads must not change NUMBA_NUM_THREADS:
+    numba re-reads it before compiling, and every later compile in the process fails."""
+    import os
+    before = os.environ.get("NUMBA_NUM_THREADS")
+    _study().run_one("tiny", 5, 20, str(tmp_path))
+    assert os.environ.get("NUMBA_NUM_THREADS") == before

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gpmotion.cli import main
-from gpmotion.evaluate import Evaluation
+from gpmotion.evaluation import Evaluation
 from gpmotion.families import make_family
 from gpmotion.gp.presets import PAPER_PRIMITIVES, apply_preset
 from gpmotion.search.gp import GPSearch
@@ -18,16 +18,16 @@ TINY = ["--param", "seconds=0.3", "--population", "8", "--generations", "2", "--
 
 
 def test_preset_expands_to_the_papers_configuration():
-    fam, search = apply_preset("gritz-hahn", "lamp_limbo")
+    fam, search = apply_preset("gritz-hahn", get_task("lamp_limbo"))
     assert fam == {"primitives": list(PAPER_PRIMITIVES), "terminals": PAPER_TERMS}
     assert "ifpos" in fam["primitives"] and "iflte" not in fam["primitives"]
     assert search == {"selection": "roulette", "p_crossover": 0.9, "p_mutation": 0.0,
                       "p_creep": 0.0, "elitism": 0, "islands": 1, "stop_on_success": True}
-    fam, search = apply_preset("gritz-hahn", "lamp_hop", {"primitives": ["add"]},
+    fam, search = apply_preset("gritz-hahn", get_task("lamp_hop"), {"primitives": ["add"]},
                                {"elitism": 2, "population": None})
     assert fam["primitives"] == ["add"] and search["elitism"] == 2     # given options win
     assert "population" not in search
-    assert apply_preset(None, "lamp_hop", {"x": None}, {"elitism": 1}) == ({}, {"elitism": 1})
+    assert apply_preset(None, get_task("lamp_hop"), {"x": None}, {"elitism": 1}) == ({}, {"elitism": 1})
 
 
 @pytest.mark.parametrize("name, task, family, message", [
@@ -36,13 +36,14 @@ def test_preset_expands_to_the_papers_configuration():
     ("gritz-hahn", "lamp_hop", "bsr-sense", "applies to --controller gp"),
 ])
 def test_bad_presets(name, task, family, message):
+    from gpmotion.families import family_class
     with pytest.raises(ValueError, match=message):
-        apply_preset(name, task, family=family)
+        family_class(family).apply_preset(name, task, {}, {})
 
 
 def test_family_terminals_option():
     task = get_task("lamp_hop")
-    fam = make_family("gp", task, **apply_preset("gritz-hahn", "lamp_hop")[0])
+    fam = make_family("gp", task, **apply_preset("gritz-hahn", task)[0])
     assert list(fam.info.terminal_names) == PAPER_TERMS
     assert fam.info.primitive_names == tuple(sorted(PAPER_PRIMITIVES)) or \
         set(fam.info.primitive_names) == set(PAPER_PRIMITIVES)
@@ -122,7 +123,7 @@ def test_cli_preset_runs_and_records_its_expansion(tmp_path, capsys):
 
 
 def test_limbo_without_curriculum_has_the_pole_at_its_height_from_the_start():
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     fixed = get_task("lamp_limbo", pole_height=0.38, pole_start=0.38)
     assert fixed.curriculum == {} and fixed.params_at(0.0)["pole_height"] == 0.38
     ev = InProcessEvaluator(fixed, make_family("gp", fixed))

@@ -13,7 +13,7 @@ from deap import gp
 from gpmotion.families import make_family
 from gpmotion.gp.bytecode import tokens_to_tree
 from gpmotion.gp.pset import compile_reference
-from gpmotion.gp.toolbox import (adjusted_fitness, creep_constants, crossover_same_dof,
+from gpmotion.gp.operators import (adjusted_fitness, creep_constants, crossover_same_dof,
                                  make_tree_operators, roulette_indices)
 from gpmotion.search.gp import GPSearch
 from gpmotion.task import get_task
@@ -254,7 +254,7 @@ def test_bad_arguments_raise_one_clear_error(family):
 def test_easimple_with_the_toolbox_on_lamp_hop():
     from deap import algorithms, tools
 
-    from gpmotion.gp.toolbox import make_toolbox
+    from gpmotion.toolbox import make_toolbox
     task = get_task("lamp_hop", seconds=0.3)
     tb = make_toolbox(task, generations=2)
     random.seed(0)

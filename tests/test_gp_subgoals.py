@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from deap import gp
 
-from gpmotion.evaluate import InProcessEvaluator
+from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.gp import primitives as registry
 from gpmotion.gp.bytecode import STACK_CAP, encode_batch, encode_trees, tokens_to_tree

@@ -90,7 +90,6 @@ def test_herman_standing_stands_for_5_s_at_the_default_step():
     It needs the implicit PD servos: the light pelvis (I ≈ 0.04 kg·m²) sits
     between the hip and waist servos (Σkd·dt/I ≈ 7), which an explicit PD
     cannot hold at this step (it jitters and falls within ~1 s)."""
-    from gpmotion.controllers import schedule
     fig = gpmotion.load_figure("herman_standing")
     assert fig.root == "free" and fig.nv == 35
     # its own ground (the TOML's [ground]): 1e5 N/m per sole point resists

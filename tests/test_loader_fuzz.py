@@ -6,13 +6,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gpmotion.families import make_family
+from gpmotion.families import family_names, make_family
 from gpmotion.records import FormatError
-from gpmotion.search.adapters import make_search
 from gpmotion.task import get_task
 
 TASK = get_task("lamp_hop", seconds=0.3)
-FAMILIES = {name: make_family(name, TASK) for name in ("gp", "bsr-sense", "bsr-time")}
+FAMILIES = {name: make_family(name, TASK) for name in family_names()}
 NAMES = ["add", "sub", "mul", "div", "iflte", "sin", "cos", "abs", "px", "vx", "t", "angle_elbow",
          "os.system", "__import__", "eval", "", "ERC", "lambda"]
 token = st.one_of(st.sampled_from(NAMES), st.floats(allow_nan=True, allow_infinity=True),
@@ -41,7 +40,7 @@ def test_controller_loader_only_raises_value_errors(data, family):
 
 
 def _checkpoint_state(family):
-    search = make_search(FAMILIES[family], seed=0, **({"population": 6, "generations": 2}
+    search = FAMILIES[family].make_search(0, **({"population": 6, "generations": 2}
                                                         if family == "gp" else
                                                         {"n_working": 4, "n_generations": 2}))
     return json.loads(json.dumps(search.state_dict())), search

@@ -165,7 +165,7 @@ def test_a_run_with_plugins_moves_and_checks_the_digest(tmp_path, capsys):
 
 def test_pool_workers_get_plugin_code_without_a_shared_folder(tmp_path):
     """Process-pool workers rebuild a plugin task from sources the run ships (no path)."""
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.evaluators import ProcessPoolEvaluator
     from gpmotion.families import make_family
     from gpmotion.task import get_task

@@ -2,7 +2,7 @@
 import numpy as np
 
 from gpmotion.cli import main
-from gpmotion.evaluate import Evaluation
+from gpmotion.evaluation import Evaluation
 from gpmotion.run import Progress
 
 

@@ -155,7 +155,7 @@ def test_normalize_fills_the_figures_defaults_and_refuses_bad_values():
 
 
 def test_batch_evaluation_is_the_aggregate_of_k_perturbed_rollouts():
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     task = get_task("starman_travel", seconds=0.5)
     fam = make_family("bsr-time", task)
     genomes = [fam.random(np.random.default_rng(s)) for s in range(3)]
@@ -186,13 +186,17 @@ def test_a_robust_run_records_its_setting_and_differs_from_a_nominal_one(tmp_pat
     assert _costs(tmp_path / "r") != _costs(tmp_path / "n")
 
 
-def test_a_robust_run_resumes_to_the_same_result(tmp_path):
+GP_SMALL = dict(family="gp", params={"seconds": "0.3"}, search={"population": 6, "generations": 3})
+
+
+@pytest.mark.parametrize("kw", [{}, GP_SMALL], ids=["bsr-time", "gp"])
+def test_a_robust_run_resumes_to_the_same_result(tmp_path, kw):
     from gpmotion.cli import main
     from gpmotion.run import run
     ref = tmp_path / "ref"
-    run(_robust_cfg(), ref, quiet=True, artifacts=False)
+    run(_robust_cfg(**kw), ref, quiet=True, artifacts=False)
     cut = tmp_path / "cut"
-    run(_robust_cfg(), cut, quiet=True, artifacts=False, max_generations=2, checkpoint_every=0)
+    run(_robust_cfg(**kw), cut, quiet=True, artifacts=False, max_generations=2, checkpoint_every=0)
     assert not (cut / "best.json").exists()
     assert main(["resume", str(cut), "--quiet"]) == 0
     assert _records(cut)[:2] == _records(ref)[:2] and _costs(cut) == _costs(ref)

@@ -1,53 +1,61 @@
-"""Serial search (Fig. 3) on toy objectives: no simulator involved."""
+"""Serial search (Fig. 3) on toy objectives: no simulator involved.
+A search minimizes costs; the toy costs are squared distances to a target."""
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from gpmotion.bsr import genome as G
 from gpmotion.bsr import mutation as M
+from gpmotion.evaluation import Evaluation
 from gpmotion.search.serial import SerialSearch
 
 LIMITS = np.array([[-1.0, 1.0], [-1.0, 1.0], [0.0, 2.0]])
 TARGET = np.array([0.3, -0.7, 1.5])
 
 
+class ToyFamily:
+    """What the serial search asks of a family: random, mutate, copy, JSON."""
+
+    def __init__(self, init, mutate, to_json=lambda g: g.to_dict(), from_json=G.genome_from_dict):
+        self.random, self.mutate, self.to_json, self.from_json = init, mutate, to_json, from_json
+
+    def copy(self, g):
+        return g.copy()
+
+
 def init_fn(rng):
     return G.random_time_genome(rng, 4, LIMITS, 0.01, 2.0, 1.0)
 
 
-def toy_score(g):
-    return -float(np.sum((g.theta0 - TARGET) ** 2))
+def toy_cost(g):
+    return float(np.sum((g.theta0 - TARGET) ** 2))
 
 
-def make(seed, **kw):
+def make(seed, task=None, **kw):
     kw = {"n_working": 6, "n_generations": 120, "reseed_every": 20, **kw}
-    return SerialSearch(init_fn, M.make_mutate_fn(), rng=np.random.default_rng(seed), **kw)
+    return SerialSearch(ToyFamily(init_fn, M.make_mutate_fn()), seed=seed, task=task, **kw)
 
 
-def run(search, sign=1.0, until=None):
+def run(search, until=None):
     while not search.done and (until is None or search.generation < until):
         cands = search.ask()
-        search.tell([sign * toy_score(g) for g in cands])
+        search.tell([toy_cost(g) for g in cands])
     return search
 
 
 def test_improves_monotonically():
     s = run(make(0))
     best = [b for _, b in s.history]
-    assert all(b2 >= b1 for b1, b2 in zip(best, best[1:]))
-    assert best[-1] > best[0] + 1.0 and best[-1] > -0.5
+    assert all(b2 <= b1 for b1, b2 in zip(best, best[1:]))
+    assert best[-1] < best[0] - 1.0 and best[-1] < 0.5
     assert [e for e, _ in s.history] == [6 * (i + 1) for i in range(121)]
     assert s.evaluations == 6 * 121 and s.best_score == best[-1]
-    assert toy_score(s.best_genome) == s.best_score
+    assert toy_cost(s.best_genome) == s.best_score
+    assert s.best_cost == s.best_score and s.best.to_dict() == s.best_genome.to_dict()
     with pytest.raises(RuntimeError):
         s.ask()
-
-
-def test_minimize_direction():
-    s = run(make(0, maximize=False), sign=-1.0)
-    best = [b for _, b in s.history]
-    assert all(b2 <= b1 for b1, b2 in zip(best, best[1:])) and best[-1] < 0.5
 
 
 def test_same_seed_identical_other_seed_differs():
@@ -79,35 +87,40 @@ def test_state_dict_resumes_identically(stop_between_ask_and_tell):
 def _marker_search(**kw):
     """Genomes are plain dicts {'id': n}; mutants count up, so we see who survives."""
     counter = iter(range(10_000))
-    return SerialSearch(lambda rng: {"id": next(counter)},
-                        lambda g, rng, extra: {"id": next(counter), "parent_extra": extra},
-                        rng=0, genome_to_json=dict, genome_from_json=dict, **kw)
+    fam = ToyFamily(lambda rng: {"id": next(counter)},
+                    lambda g, rng, extra: {"id": next(counter), "parent_extra": extra},
+                    to_json=dict, from_json=dict)
+    return SerialSearch(fam, seed=0, **kw)
+
+
+def _tell(s, costs, extras=None):
+    s.tell(Evaluation.of_costs(costs, extras))
 
 
 def test_replacement_is_strict_unless_ties_accepted():
     for ties, expect in [(False, [0, 1]), (True, [2, 3])]:
         s = _marker_search(n_working=2, n_generations=5, reseed_every=100, accept_ties=ties)
-        s.ask(); s.tell([1.0, 2.0])
-        s.ask(); s.tell([1.0, 2.0])                      # equal scores
+        s.ask(); s.tell([-1.0, -2.0])
+        s.ask(); s.tell([-1.0, -2.0])                    # equal costs
         assert [g["id"] for g in s.working] == expect
-        s.ask(); s.tell([0.5, 3.0])                      # worse, better
+        s.ask(); s.tell([-0.5, -3.0])                    # worse, better
         assert s.working[1]["id"] == 5 and s.working[0]["id"] == expect[0]
 
 
-def test_nonfinite_scores_are_worst():
+def test_nonfinite_costs_are_worst():
     s = _marker_search(n_working=2, n_generations=5, reseed_every=100)
-    s.ask(); s.tell([float("nan"), 1.0])
-    s.ask(); s.tell([-1e9, float("inf")])
-    assert [g["id"] for g in s.working] == [2, 1] and s.best_score == 1.0
+    s.ask(); s.tell([float("nan"), -1.0])
+    s.ask(); s.tell([1e9, -float("inf")])
+    assert [g["id"] for g in s.working] == [2, 1] and s.best_score == -1.0
     json.dumps(s.state_dict(), allow_nan=False)
 
 
 def test_reseed_copies_top_half_over_bottom_half():
     s = _marker_search(n_working=4, n_generations=5, reseed_every=1)
     s.ask(); s.tell([0.0, 0.0, 0.0, 0.0])
-    s.ask(); s.tell([1.0, 4.0, 2.0, 3.0], extras=[[1.0], [4.0], [2.0], [3.0]])
-    # ranks: 1 (4.0), 3 (3.0), 2, 0 -> slot 2 <- slot 1, slot 0 <- slot 3
-    assert list(s.scores) == [3.0, 4.0, 4.0, 3.0]
+    s.ask(); _tell(s, [-1.0, -4.0, -2.0, -3.0], extras=[[1.0], [4.0], [2.0], [3.0]])
+    # ranks: 1 (-4.0), 3 (-3.0), 2, 0 -> slot 2 <- slot 1, slot 0 <- slot 3
+    assert list(s.scores) == [-3.0, -4.0, -4.0, -3.0]
     assert [g["id"] for g in s.working] == [7, 5, 5, 7]
     assert s.working[2] is not s.working[1]
     assert [float(e[0]) for e in s.extras] == [3.0, 4.0, 4.0, 3.0]
@@ -125,17 +138,17 @@ def test_sense_genomes_with_relevance_trajectories():
     def trajectory(g):       # stand-in for a rollout: deterministic sense path
         return np.clip(np.linspace(0, 1, 20)[:, None] * (g.theta0[0] + 1.5) / 3.5, 0, 1)
 
-    s = SerialSearch(init, M.make_mutate_fn(p_reinit=0.5), n_working=4,
-                     n_generations=30, reseed_every=10, rng=1)
+    s = SerialSearch(ToyFamily(init, M.make_mutate_fn(p_reinit=0.5)), n_working=4,
+                     n_generations=30, reseed_every=10, seed=1)
     while not s.done:
         c = s.ask()
-        s.tell([toy_score(g) for g in c], extras=[trajectory(g) for g in c])
+        _tell(s, [toy_cost(g) for g in c], extras=[trajectory(g) for g in c])
         if s.generation == 15:
             state = json.loads(json.dumps(s.state_dict()))
-            s2 = SerialSearch(init, M.make_mutate_fn(p_reinit=0.5), rng=7)
+            s2 = SerialSearch(ToyFamily(init, M.make_mutate_fn(p_reinit=0.5)), seed=7)
             s2.load_state_dict(state)
             assert all(np.array_equal(a, b) for a, b in zip(s.extras, s2.extras))
-    assert s.history[-1][1] > s.history[0][1]
+    assert s.history[-1][1] < s.history[0][1]
 
 
 # -- phases: scores under phased-in terms go stale (issue 12, defect 1) ------
@@ -143,34 +156,39 @@ def test_sense_genomes_with_relevance_trajectories():
 STYLE = np.array([1.0, 0.0, 0.0])
 
 
-def phased_score(g, phase):
-    """Phase 0: toy_score; phase 1 adds a style penalty that most controllers pay."""
-    return toy_score(g) - phase[0] * 20.0 * float(np.sum((g.theta0[:, :1] - STYLE[0]) ** 2))
+def phased_cost(g, phase):
+    """Phase 0: toy_cost; phase 1 adds a style penalty that most controllers pay."""
+    return toy_cost(g) + phase[0] * 20.0 * float(np.sum((g.theta0[:, :1] - STYLE[0]) ** 2))
 
 
 def run_phased(search, until=None):
     while not search.done and (until is None or search.generation < until):
         phase = search.current_phase()        # the round the candidates are scored in
         cands = search.ask()
-        search.tell([phased_score(g, phase) for g in cands])
+        search.tell([phased_cost(g, phase) for g in cands])
     return search
 
 
+# progress moves in 3 stages over 120 rounds (0, 0.5 from round 40, 1 from round 80);
+# the style term is on from progress 0.5
+TOY_TASK = SimpleNamespace(phase=lambda p: (0.0 if p < 0.5 else 1.0,), staged=lambda p: ())
+
+
 def make_phased(seed, **kw):
-    return make(seed, phase_fn=lambda gen: (0.0 if gen < 40 else 1.0,), **kw)
+    return make(seed, task=TOY_TASK, phase_steps=3, **kw)
 
 
 def test_phase_change_rescores_working_set_and_best():
     s = run_phased(make_phased(3))
     final = (1.0,)
     # every stored score, and the best, is a score of the final phase
-    assert [phased_score(g, final) for g in s.working] == list(s.scores)
-    assert phased_score(s.best_genome, final) == s.best_score
-    assert s.best_score >= max(s.scores)
+    assert [phased_cost(g, final) for g in s.working] == list(s.scores)
+    assert phased_cost(s.best_genome, final) == s.best_score
+    assert s.best_score <= min(s.scores)
     # one re-score of C + 1 candidates, counted as evaluations
     assert s.evaluations == 6 * 121 + 7
     assert [e for e, _ in s.history][40:42] == [6 * 41, 6 * 41 + 7]
-    # no re-score without a phase change, none without phase_fn
+    # no re-score without a phase change, none without a task
     assert run(make(3)).evaluations == 6 * 121
 
 
@@ -181,9 +199,9 @@ def test_rescore_draws_no_random_numbers_and_keeps_best_when_not_beaten():
     best = s.best_genome.to_dict()
     cands = s.ask()
     assert s.rescoring and len(cands) == 7 and s.rng.bit_generator.state == rng_state
-    s.tell([-1e3] * 6 + [-5.0])                      # the incumbent stays the best
-    assert s.best_genome.to_dict() == best and s.best_score == -5.0
-    assert not s.rescoring and list(s.scores) == [-1e3] * 6
+    s.tell([1e3] * 6 + [5.0])                        # the incumbent stays the best
+    assert s.best_genome.to_dict() == best and s.best_score == 5.0
+    assert not s.rescoring and list(s.scores) == [1e3] * 6
 
 
 @pytest.mark.parametrize("stop_between_ask_and_tell", [False, True])

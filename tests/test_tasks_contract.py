@@ -75,7 +75,7 @@ def test_limbo_pole_hits_are_penalized():
 
 
 def test_limbo_pole_comes_down_over_the_curriculum():
-    from gpmotion.evaluate import InProcessEvaluator
+    from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.families import make_family
     from gpmotion.search.gp import GPSearch
     task = get_task("lamp_limbo", pole_height=0.40)

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpmotion.bsr.genome import LAMBDA_MAX, LAMBDA_MIN, SenseGenome, log_uniform, random_theta0
-from gpmotion.bsr.mutation import P_REINIT, creep_rule
+from gpmotion.bsr.mutation import P_REINIT, creep_rule, usable_frame
 from gpmotion.search.serial import SerialSearch, _extra_from_json, _extra_to_json, _score_to_json
 
 ENRICH_INITIAL = 100
@@ -34,14 +34,10 @@ ENRICH_ROUNDS = 3
 def containing_stimulus(rng: np.random.Generator, trajectory):
     """(μ, λ, point, frame): a Table-2-sized box containing a random usable
     frame of ``trajectory`` [F, V] (normalized senses); None if none is usable."""
-    traj = np.asarray(trajectory, dtype=np.float64)
-    if traj.ndim != 2 or traj.shape[0] == 0:
+    picked = usable_frame(trajectory, rng)
+    if picked is None:
         return None
-    usable = np.flatnonzero(np.all(np.isfinite(traj), axis=1))
-    if usable.size == 0:
-        return None
-    frame = int(usable[rng.integers(usable.size)])
-    point = np.clip(traj[frame], 0.0, 1.0)
+    frame, point = picked
     lam = np.clip(2.0 / log_uniform(rng, 0.4, 4.0, point.size), LAMBDA_MIN, LAMBDA_MAX)
     mu = point + rng.uniform(-1.0, 1.0, point.size) / lam
     return mu, lam, point, frame
@@ -76,73 +72,73 @@ class EnrichedSerialSearch(SerialSearch):
     """Fig. 3's serial search started from enriched controllers (module doc).
 
     Before the search proper, ``ask`` hands out the ``n_initial`` random
-    controllers, then ``rounds`` times their contain-mutants; the scores of
+    controllers, then ``rounds`` times their contain-mutants; the costs of
     the last round pick the working set.  All of these count as evaluations.
     """
 
-    def __init__(self, init_fn, mutate_fn, n_initial: int = ENRICH_INITIAL,
+    def __init__(self, family, seed=None, n_initial: int = ENRICH_INITIAL,
                  rounds: int = ENRICH_ROUNDS, **kw):
-        super().__init__(init_fn, mutate_fn, **kw)
+        super().__init__(family, seed, **kw)
         if n_initial < self.n_working or rounds < 0:
             raise ValueError(f"enrichment needs n_initial >= n_working ({self.n_working}) and rounds >= 0")
         self.n_initial, self.rounds = int(n_initial), int(rounds)
-        self.pool = None               # [genomes, scores, extras] while enriching
+        self.pool = None               # [genomes, costs, extras] while enriching
         self.round = 0
 
-    def ask(self) -> list:
+    def _ask(self) -> list:
         if self.working is not None:
-            return super().ask()
+            return super()._ask()
         if self.pending is None:
             if self.pool is None:
-                self.pending = [self.init_fn(self.rng) for _ in range(self.n_initial)]
+                self.pending = [self.family.random(self.rng) for _ in range(self.n_initial)]
             else:
                 self.pending = [contain_rule(g, self.rng, e) for g, e in zip(self.pool[0], self.pool[2])]
         return list(self.pending)
 
-    def tell(self, scores, extras=None) -> None:
+    def _tell(self, ev) -> None:
         if self.working is not None:
-            return super().tell(scores, extras)
+            return super()._tell(ev)
         if self.pending is None:
             raise RuntimeError("tell() without a pending ask()")
-        scores = np.array(scores, dtype=np.float64).ravel()
+        costs = np.array(ev.costs, dtype=np.float64).ravel()
         n = len(self.pending)
-        extras = [None] * n if extras is None else list(extras)
-        if scores.size != n or len(extras) != n:
-            raise ValueError(f"tell: expected {n} scores and extras, got {scores.size} and {len(extras)}")
+        extras = [None] * n if ev.extras is None else list(ev.extras)
+        if costs.size != n or len(extras) != n:
+            raise ValueError(f"tell: expected {n} costs and extras, got {costs.size} and {len(extras)}")
         self.evaluations += n
         if self.pool is not None:
             self.round += 1
-        self.pool, self.pending = [list(self.pending), scores, extras], None
-        i = max(range(n), key=lambda k: (self._key(scores[k]), -k))
-        if self.best_genome is None or self._better(scores[i], self.best_score):
-            self.best_genome, self.best_score = self.pool[0][i].copy(), float(scores[i])
+        self.pool, self.pending = [list(self.pending), costs, extras], None
+        i = max(range(n), key=lambda k: (self._key(costs[k]), -k))
+        if self.best_genome is None or self._better(costs[i], self.best_score):
+            self.best_genome, self.best_score = self.family.copy(self.pool[0][i]), float(costs[i])
         if self.round >= self.rounds:
-            keys = np.array([self._key(s) for s in scores])
+            keys = np.array([self._key(c) for c in costs])
             top = np.argsort(-keys, kind="stable")[:self.n_working]
             self.working = [self.pool[0][k] for k in top]
-            self.scores = scores[top].copy()
+            self.scores = costs[top].copy()
             self.extras = [extras[k] for k in top]
             self.phase = self.current_phase()
             self.pool = None
         self.history.append((self.evaluations, self.best_score))
 
-    def state_dict(self) -> dict:
-        state = super().state_dict()
-        enc = self.genome_to_json
+    def _state(self) -> dict:
+        state = super()._state()
+        enc = self.family.to_json
         state["enrich"] = {"n_initial": self.n_initial, "rounds": self.rounds, "round": self.round,
                            "pool": None if self.pool is None else
-                           [[enc(g) for g in self.pool[0]], [_score_to_json(s) for s in self.pool[1]],
+                           [[enc(g) for g in self.pool[0]], [_score_to_json(c) for c in self.pool[1]],
                             [_extra_to_json(e) for e in self.pool[2]]]}
         return state
 
-    def load_state_dict(self, state: dict) -> None:
-        super().load_state_dict(state)
+    def _load(self, state: dict) -> None:
+        super()._load(state)
         e = state.get("enrich")
         if not isinstance(e, dict):
             raise ValueError("not an enriched serial-search checkpoint (no 'enrich' entry)")
         self.n_initial, self.rounds, self.round = int(e["n_initial"]), int(e["rounds"]), int(e["round"])
         pool = e["pool"]
         self.pool = None if pool is None else [
-            [self.genome_from_json(g) for g in pool[0]],
-            np.array([(-np.inf if self.maximize else np.inf) if s is None else float(s) for s in pool[1]]),
+            [self.family.from_json(g) for g in pool[0]],
+            np.array([np.inf if c is None else float(c) for c in pool[1]]),
             [_extra_from_json(x) for x in pool[2]]]

@@ -10,8 +10,6 @@ family names the difference.
 """
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from gpmotion.bsr import contain, senses3d
@@ -40,5 +38,4 @@ def use_3d_senses(family, filter_tau: float = senses3d.FILTER_TAU) -> None:
     family.senses3d = helper
     family.sense_indices = np.arange(plan.n_senses)        # V stimulus columns
     family.encode, family.normalized, family.mutate = helper.encode, helper.normalized, helper.mutate
-    family.serial_search = functools.partial(contain.EnrichedSerialSearch,
-                                             n_initial=contain.ENRICH_INITIAL, rounds=contain.ENRICH_ROUNDS)
+    family.search_class = contain.EnrichedSerialSearch     # starts from enriched controllers

@@ -49,6 +49,19 @@ def normalized_sense_trajectory(raw, sense_lo, sense_hi, sense_indices) -> np.nd
     return np.clip(y, 0.0, 1.0)[..., np.asarray(sense_indices, dtype=np.int64)]
 
 
+def usable_frame(trajectory, rng):
+    """(frame, point) of a random frame of ``trajectory`` [F, V] whose senses are all
+    finite, the point clipped to [0, 1] (senses_norm's range); None if there is none."""
+    traj = np.asarray(trajectory, dtype=np.float64)
+    if traj.ndim != 2 or traj.shape[0] == 0:
+        return None
+    usable = np.flatnonzero(np.all(np.isfinite(traj), axis=1))
+    if usable.size == 0:
+        return None
+    frame = int(usable[rng.integers(usable.size)])
+    return frame, np.clip(traj[frame], 0.0, 1.0)
+
+
 def relevant_stimulus(rng: np.random.Generator, trajectory) -> tuple | None:
     """A Table-2-sized box with a corner on a random trajectory point.
 
@@ -57,14 +70,10 @@ def relevant_stimulus(rng: np.random.Generator, trajectory) -> tuple | None:
     in a random direction per sense, μ_k = p_k ± 1/λ_k, so p is exactly one
     of its 2^V corners.
     """
-    traj = np.asarray(trajectory, dtype=np.float64)
-    if traj.ndim != 2 or traj.shape[0] == 0:
+    picked = usable_frame(trajectory, rng)
+    if picked is None:
         return None
-    usable = np.flatnonzero(np.all(np.isfinite(traj), axis=1))
-    if usable.size == 0:
-        return None
-    frame = int(usable[rng.integers(usable.size)])
-    point = np.clip(traj[frame], 0.0, 1.0)          # senses_norm is in [0, 1]
+    frame, point = picked
     lam = np.clip(2.0 / log_uniform(rng, 0.4, 4.0, point.size),
                   LAMBDA_MIN, LAMBDA_MAX)
     sign = rng.choice(np.array([-1.0, 1.0]), point.size)

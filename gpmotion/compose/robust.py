@@ -266,7 +266,7 @@ def sizes_of(robust: dict) -> Perturbation:
 def batch_evaluation(ev, genomes, progress: float, generation: int):
     """One generation's batch scored from ``ev.robust['starts']`` perturbed starts.
 
-    ``ev`` is an :class:`gpmotion.evaluate.InProcessEvaluator` whose ``robust``
+    ``ev`` is an :class:`gpmotion.inprocess.InProcessEvaluator` whose ``robust``
     holds a normalized setting plus the run's ``seed``.  The starts depend on
     (seed, generation) only, so chunks on any backend and a resumed run see
     the same ones.  Per controller: cost = the aggregate of its K costs;
@@ -275,7 +275,7 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     worst start (``worst``), so a cost recomputed from them (the final-weights
     column) agrees with the aggregate; extras (BSR senses) from its first start.
     """
-    from ..evaluate import Evaluation
+    from ..evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
     q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
@@ -292,9 +292,8 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
         c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
         pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
         folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
-    extras = None
-    if fam.needs_senses:
-        extras = [fam.normalized(traj.senses[e * k]) for e in range(n)]
+    extras = fam.extras(traj)                                   # per episode; a genome's first start
+    extras = None if extras is None else extras[::k]
     return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
                       traj.diverged.reshape(n, k).any(axis=1), folded, extras)
 

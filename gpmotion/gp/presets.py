@@ -53,15 +53,13 @@ def preset_options(name: str, task) -> tuple[dict, dict]:
     return fam, search
 
 
-def apply_preset(name: str | None, task_name: str, family_options: dict | None = None,
-                 search: dict | None = None, family: str = "gp") -> tuple[dict, dict]:
-    """Merge preset ``name`` under the given options (given, non-None values win)."""
+def apply_preset(name: str | None, task, family_options: dict | None = None,
+                 search: dict | None = None) -> tuple[dict, dict]:
+    """Merge preset ``name`` for ``task`` (a Task) under the given options (given,
+    non-None values win).  (Other families refuse presets: ``Family.apply_preset``.)"""
     family_options = {k: v for k, v in (family_options or {}).items() if v is not None}
     search = {k: v for k, v in (search or {}).items() if v is not None}
     if not name:
         return family_options, search
-    if family != "gp":
-        raise ValueError(f"a GP preset applies to --controller gp, not {family}")
-    from gpmotion.task import get_task
-    fam, srch = preset_options(name, get_task(task_name))
+    fam, srch = preset_options(name, task)
     return {**fam, **family_options}, {**srch, **search}

@@ -3,9 +3,10 @@
 An individual is a list of ``gp.PrimitiveTree``, one per actuator.  The
 search never simulates: ``ask()`` returns plain-data genomes (one token list
 per tree, what ``family.encode``/``to_json`` take and what crosses processes)
-to be evaluated at ``progress``; ``tell(costs)`` takes their costs (lower is
-better) and breeds the next generation.  Operators are in
-:mod:`gpmotion.gp.toolbox` (crossover between trees of the same DOF only,
+to be evaluated at ``progress``; ``tell(evaluation)`` takes their costs
+(lower is better) and breeds the next generation (the interface, the
+final-scoring best and the log rows are :class:`gpmotion.search.base.Search`'s).
+Operators are in :mod:`gpmotion.gp.operators` (crossover between trees of the same DOF only,
 one random DOF per mating; ``mutUniform`` on one DOF; static depth/size
 limits; roulette on ``1/(1+cost)`` or tournament).  Each new individual is
 made by crossover with ``p_crossover``, mutation with ``p_mutation``,
@@ -29,11 +30,11 @@ Decisions, stated once here:
   So ``ask()`` returns the *unique, unknown* genomes only, and generation 0
   the whole (deduplicated) population.
 * **Hall of fame across phases.**  Costs from different phases are not
-  comparable (style terms only add cost as they phase in).  ``best`` is
+  comparable (style terms only add cost as they phase in).  ``hall_of_fame`` is
   replaced by a generation's best when that cost is strictly lower *or* the
   incumbent was scored under another phase; so once the phases stop changing
   (progress past every term's ramp, and always in the last generation,
-  progress 1), ``best`` is the best ever under the full score.
+  progress 1), ``hall_of_fame`` is the best ever under the full score.
   ``generation_best`` keeps each generation's best with the cost it had then.
 * **Randomness.**  DEAP's operators (and the primitive set's ERC) draw from
   the module-level :mod:`random`.  The search keeps its own state, seeded
@@ -57,12 +58,13 @@ import random
 import numpy as np
 from deap import gp
 
-from gpmotion.gp.bytecode import MAX_TREE_DEPTH, MAX_TREE_SIZE, tokens_to_tree, tree_to_tokens
-from gpmotion.gp.toolbox import (clean_costs, creep_constants, crossover_same_dof,
-                                 make_tree_operators, mutate_one_dof, random_tree, roulette_indices,
-                                 tournament_indices)
-from gpmotion.records import python_random_state_from_json, python_random_state_to_json
-from gpmotion.task import WORST
+from ..gp.bytecode import MAX_TREE_DEPTH, MAX_TREE_SIZE, tokens_to_tree, tree_to_tokens
+from ..gp.operators import (clean_costs, creep_constants, crossover_same_dof,
+                            make_tree_operators, mutate_one_dof, random_tree, roulette_indices,
+                            tournament_indices)
+from ..records import python_random_state_from_json, python_random_state_to_json
+from ..task import WORST
+from .base import Search
 
 STATE_FORMAT = "gp-search-v1"
 SELECTIONS = ("roulette", "tournament")
@@ -78,8 +80,9 @@ def genome_key(individual) -> tuple:
                  for t in individual)
 
 
-class GPSearch:
+class GPSearch(Search):
     """Generational GP over one-tree-per-DOF individuals (Gritz & Hahn)."""
+    total_key = "generations"
 
     def __init__(self, family, population: int = 500, generations: int = 50,
                  p_crossover: float = 0.9, p_mutation: float = 0.02,
@@ -88,8 +91,8 @@ class GPSearch:
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True,
-                 stop_on_success: bool = False):
-        self.family = family
+                 stop_on_success: bool = False, task=None):
+        super().__init__(family, task if task is not None else getattr(family, "task", None))
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
                              p_creep=p_creep, creep_sigma=creep_sigma, islands=islands,
@@ -106,7 +109,7 @@ class GPSearch:
         self._pending: list[tuple] | None = None
         self._parents: dict[tuple, float] = {}    # last told generation: key -> cost
         self._parents_phase: tuple | None = None
-        self._best_key, self.best_cost = None, float("inf")
+        self._best_key, self.hof_cost = None, float("inf")
         self.best_generation, self._best_phase = -1, None
         self.generation_best: list[dict] = []
         self.history: list[dict] = []
@@ -194,23 +197,30 @@ class GPSearch:
             random.setstate(outer)
 
     # -- phases --------------------------------------------------------------
-    schedule = None      # generations the phases span; set by an extension (adapters)
-
     def progress_of(self, generation: int) -> float:
         n = self.schedule or self.generations
         return 1.0 if n == 1 else min(1.0, generation / (n - 1))
 
     @property
-    def progress(self) -> float:
-        """Run progress in [0, 1] of the current generation; pass it to the evaluator."""
-        return self.progress_of(self.generation)
+    def progress_span(self) -> int:
+        return max(1, (self.schedule or self.generations) - 1)
 
-    def phase_of(self, generation: int) -> tuple:
-        """What a cost depends on at ``generation``: the task's style-term factors
-        and curriculum values (``Task.phase``)."""
-        p = self.progress_of(generation)
-        task = getattr(self.family, "task", None)
-        return task.phase(p) if task is not None else (p,)
+    @property
+    def total(self) -> int:
+        return self.generations
+
+    def extend(self, total: int, schedule: int) -> None:
+        """Run to ``total`` generations; the phases keep spanning ``schedule``, so
+        the added generations run at the final weights.  A finished search
+        kept its last population unbred: breed it as tell() would have."""
+        self.schedule = schedule
+        if total > self.generations and self.done and self.costs is not None:
+            self.generations = total
+            self.generation -= 1
+            with self._own_random():
+                self._set_population(self._breed())
+            self.generation += 1
+        self.generations = max(self.generations, total)
 
     def _cache_phase(self, generation: int) -> tuple:
         return self.phase_of(generation) if self.reuse_costs else (float(generation),)
@@ -248,7 +258,7 @@ class GPSearch:
         same = self._parents_phase == self._cache_phase(self.generation)
         return self._parents if same else {}
 
-    def ask(self) -> list:
+    def _ask(self) -> list:
         """Genomes (lists of token lists) to evaluate at ``progress``; asking
         again before ``tell`` returns the same list."""
         if self.done:
@@ -262,17 +272,12 @@ class GPSearch:
             self._pending = pending
         return [[list(t) for t in k] for k in self._pending]
 
-    def tell(self, costs=None, evaluation=None) -> None:
+    def _tell(self, evaluation) -> None:
         """Costs (lower is better) for the genomes of the last ``ask``, in order;
-        non-finite costs count as ``WORST``.  ``evaluation`` (optional, an
-        ``Evaluation``) supplies costs if ``costs`` is None and success counts."""
+        non-finite costs count as ``WORST``."""
         if self._pending is None:
             raise RuntimeError("tell() without a pending ask()")
-        if costs is None:
-            if evaluation is None:
-                raise ValueError("tell() needs costs or an evaluation")
-            costs = evaluation.costs
-        c = clean_costs(costs, WORST)
+        c = clean_costs(evaluation.costs, WORST)
         if c.size != len(self._pending):
             raise ValueError(f"tell: expected {len(self._pending)} costs, got {c.size}")
         table = dict(self._known())
@@ -290,25 +295,24 @@ class GPSearch:
         self.generation += 1
 
     def _record(self, n_evaluated: int, evaluation) -> None:
-        c = self.costs
+        c = self._told_costs = self.costs           # the population's costs (breeding resets them)
         i = int(np.argmin(c))                    # first of equal minima
         phase = self.phase_of(self.generation)
         cost = float(c[i])
         self.generation_best.append({"generation": self.generation, "progress": self.progress,
                                      "cost": cost, "genome": [list(t) for t in self._keys[i]]})
-        if self._best_key is None or phase != self._best_phase or cost < self.best_cost:
-            self._best_key, self.best_cost = self._keys[i], cost
+        if self._best_key is None or phase != self._best_phase or cost < self.hof_cost:
+            self._best_key, self.hof_cost = self._keys[i], cost
             self.best_generation, self._best_phase = self.generation, phase
         sizes = [len(t) for ind in self._pop for t in ind]
         row = {"generation": self.generation, "progress": self.progress,
                "evaluations": self.evaluations, "evaluated": n_evaluated,
                "min": cost, "median": float(np.median(c)), "mean": float(np.mean(c)),
                "max": float(np.max(c)),
-               "best_so_far": self.best_cost, "avg_tree_size": float(np.mean(sizes)),
+               "best_so_far": self.hof_cost, "avg_tree_size": float(np.mean(sizes)),
                "max_tree_depth": max(t.height for ind in self._pop for t in ind)}
-        if evaluation is not None:
-            row["n_success"] = int(np.sum(evaluation.success))
-            row["n_failed"] = int(np.sum(evaluation.failed))
+        row["n_success"] = int(np.sum(evaluation.success))
+        row["n_failed"] = int(np.sum(evaluation.failed))
         self.history.append(row)
 
     def _stop_if_solved(self, evaluation, costs) -> None:
@@ -316,14 +320,14 @@ class GPSearch:
         scene is the final one (no curriculum step left), a generation in which
         some genome solves the task ends the run; ``best`` becomes the cheapest
         solving genome of that generation."""
-        task = getattr(self.family, "task", None)
-        if (not self.stop_on_success or evaluation is None or task is None
+        task = self.task
+        if (not self.stop_on_success or task is None
                 or task.staged(self.progress) != task.staged(1.0)):
             return
         ok = np.flatnonzero(np.asarray(evaluation.success, dtype=bool))
         if ok.size:
             i = int(ok[np.argmin(costs[ok])])
-            self._best_key, self.best_cost = self._pending[i], float(costs[i])
+            self._best_key, self.hof_cost = self._pending[i], float(costs[i])
             self.best_generation, self._best_phase = self.generation, self.phase_of(self.generation)
             self.stopped = True
 
@@ -385,12 +389,31 @@ class GPSearch:
 
     # -- results ---------------------------------------------------------------
     @property
-    def best(self):
+    def hall_of_fame(self):
         """Hall-of-fame genome (token lists), or None before the first ``tell``."""
         return None if self._best_key is None else [list(t) for t in self._best_key]
 
+    def _own_best(self) -> tuple:
+        return self.hall_of_fame, self.hof_cost
+
+    def _row_costs(self, ev) -> tuple:
+        """A row names the generation told and is over the whole population
+        (copies reuse their costs), not only the genomes evaluated this time."""
+        return self.generation - 1, self._told_costs
+
+    def _row_columns(self) -> dict:
+        return {"avg_tree_size": round(self.history[-1]["avg_tree_size"], 2)}
+
+    def logged_generation(self) -> int:
+        return self.generation - 1
+
+    def check_restored(self) -> None:
+        if len(self.population) != self.population_size:
+            raise ValueError(f"its population has {len(self.population)} entries, the settings "
+                             f"say {self.population_size}")
+
     # -- checkpoints -------------------------------------------------------------
-    def state_dict(self) -> dict:
+    def _state(self) -> dict:
         """JSON-safe snapshot; a pending ``ask`` is recomputed on resume."""
         enc = self.family.to_json
         dec_key = lambda k: enc([list(t) for t in k])  # noqa: E731
@@ -405,13 +428,13 @@ class GPSearch:
                 "genomes": [dec_key(k) for k in self._parents],
                 "costs": list(self._parents.values())},
             "best": None if self._best_key is None else {
-                "genome": dec_key(self._best_key), "cost": self.best_cost,
+                "genome": dec_key(self._best_key), "cost": self.hof_cost,
                 "generation": self.best_generation, "phase": list(self._best_phase)},
             "generation_best": [dict(g, genome=enc(g["genome"])) for g in self.generation_best],
             "history": [dict(h) for h in self.history],
         }
 
-    def load_state_dict(self, state: dict) -> None:
+    def _load(self, state: dict) -> None:
         """Restore a :meth:`state_dict` snapshot (its config wins)."""
         if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
             raise ValueError(f"not a {STATE_FORMAT} checkpoint")
@@ -438,7 +461,7 @@ class GPSearch:
         self._parents_phase = None if par is None else tuple(par["phase"])
         b = state["best"]
         self._best_key = None if b is None else key(b["genome"])
-        self.best_cost = float("inf") if b is None else float(b["cost"])
+        self.hof_cost = float("inf") if b is None else float(b["cost"])
         self.best_generation = -1 if b is None else int(b["generation"])
         self._best_phase = None if b is None else tuple(b["phase"])
         self.generation_best = [dict(g, genome=[list(t) for t in key(g["genome"])])

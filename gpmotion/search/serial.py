@@ -4,23 +4,28 @@ C hill climbers run side by side on a working set of controllers: each
 generation every working controller is mutated once and the mutant replaces
 it "if the new controller is better than the old one"; every R generations
 the set is rank-ordered and its bottom 50 % replaced by copies of the top
-50 %.  The object never simulates anything: ``ask()`` returns the genomes to
+50 %.  The object never simulates anything (the interface is
+:class:`gpmotion.search.base.Search`'s): ``ask()`` returns the genomes to
 evaluate (the C initial controllers first, then one mutant per working
-controller), ``tell(scores, extras)`` takes their scores and optional
-per-candidate extras — for BSR the normalized sense trajectory of that
-candidate's rollout, which the relevance heuristic needs when the candidate,
-having become a working controller, is mutated later.
+controller), ``tell(evaluation)`` takes their costs (lower is better) and
+the evaluation's per-candidate ``extras`` — for BSR the normalized sense
+trajectory of that candidate's rollout, which the relevance heuristic needs
+when the candidate, having become a working controller, is mutated later.
+The family supplies ``random(rng)``, ``mutate(genome, rng, extra)`` (must
+not modify its input), ``copy``, ``to_json`` and ``from_json``.
 
 Decisions, all stated once here:
 * replacement is strict ("better", Fig. 3) unless ``accept_ties=True``;
-* non-finite scores count as the worst possible;
+* non-finite costs count as the worst possible;
 * reseeding, with h = C // 2 and a stable rank order (ties by position):
   the k-th best (k < h) is copied over the k-th of the bottom h, score and
   extras included; with odd C the middle controller stays;
 * the best-so-far is updated on strict improvement only;
-* phases: a score may depend on the round it was made in (style terms
-  phased in over the run).  ``phase_fn(generation)`` names that phase (any
-  JSON-able tuple; None: scores never go stale).  When the phase of the
+* progress: run progress moves in ``phase_steps`` equal stages
+  (:func:`serial_progress`), 0 in the first and 1 in the last;
+* phases: a cost may depend on the round it was made in (style terms
+  phased in over the run): ``phase_of(generation)`` names that phase (the
+  task's; without a task, costs never go stale).  When the phase of the
   next round differs from the one the working set was scored in, ``ask()``
   first hands out the working set and the best-so-far for re-scoring (C + 1
   candidates, counted in ``evaluations`` like any other: a budget buys
@@ -28,32 +33,52 @@ Decisions, all stated once here:
   the re-scored incumbent, or a working controller if strictly better.  So
   mutants are only ever compared with scores of their own phase, and at the
   end ``best_genome`` is the best under the last phase's scoring.  A
-  re-score draws no random numbers.
+  re-score draws no random numbers.  (A re-score is its own row of the log:
+  a generation number repeated, C + 1 evaluations.)
 ``state_dict()`` is JSON-safe (rng state from ``rng.bit_generator.state``),
 so a run resumes bit-for-bit from a checkpoint taken between any two calls.
 """
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
 
+from .base import Search
+
 STATE_FORMAT = "serial-search-v2"
 OLD_FORMATS = ("serial-search-v1",)       # kept no phase: re-scored on the next ask
+PHASE_STEPS = 20
 
 
-def _default_to_json(genome):
-    return genome.to_dict()
+def serial_progress(generation: int, n_generations: int, phase_steps: int) -> float:
+    """Run progress of serial round ``generation``: held constant over
+    ``phase_steps`` equal stages, 0 in the first and 1 in the last, so style
+    terms reach full weight and the working set is re-scored at most
+    phase_steps − 1 times (not before every round of a ramp)."""
+    steps = max(1, min(phase_steps, n_generations))
+    if steps == 1:
+        return 1.0
+    stage = min(steps - 1, generation * steps // max(1, n_generations))
+    return stage / (steps - 1)
 
 
-def _default_from_json(d):
-    from gpmotion.bsr.genome import genome_from_dict
-    return genome_from_dict(d)
+def serial_rescores(task, n_generations: int, phase_steps: int) -> int:
+    """How many times a serial run re-scores its working set (phase changes)."""
+    steps = max(1, min(phase_steps, n_generations))
+    phases = [task.phase(k / (steps - 1) if steps > 1 else 1.0) for k in range(steps)]
+    return sum(a != b for a, b in zip(phases, phases[1:]))
 
 
-def _copy(genome):
-    return genome.copy() if hasattr(genome, "copy") else copy.deepcopy(genome)
+def serial_generations(task, budget: int, n_working: int = 10,
+                       phase_steps: int = PHASE_STEPS) -> int:
+    """Most rounds whose evaluations (C initial + C per round + C + 1 per
+    re-score) fit in ``budget``; at least 1."""
+    g = max(1, (budget - n_working) // n_working)
+    while g > 1 and n_working * (1 + g) + (n_working + 1) * serial_rescores(
+            task, g, phase_steps) > budget:
+        g -= 1
+    return g
 
 
 def _extra_to_json(extra):
@@ -73,29 +98,28 @@ def _score_to_json(x):
     return float(x) if math.isfinite(x) else None
 
 
-class SerialSearch:
-    """Fig. 3 hill climbers with reseeding.  ``init_fn(rng) -> genome``,
-    ``mutate_fn(genome, rng, extra) -> genome`` (must not modify its input).
-    """
+class SerialSearch(Search):
+    """Fig. 3 hill climbers with reseeding, minimizing costs (module docstring)."""
+    total_key = "n_generations"
+    row_extra = {"avg_tree_size": ""}     # the log's columns are GP's too
 
-    def __init__(self, init_fn, mutate_fn, n_working: int = 10,
-                 n_generations: int = 4000, reseed_every: int = 200, rng=None,
-                 maximize: bool = True, accept_ties: bool = False,
-                 genome_to_json=_default_to_json,
-                 genome_from_json=_default_from_json, phase_fn=None):
-        if rng is None:
-            raise ValueError("SerialSearch needs rng (a numpy Generator or a seed)")
+    def __init__(self, family, seed: int | None = None, n_working: int = 10,
+                 n_generations: int = 4000, reseed_every: int = 200,
+                 accept_ties: bool = False, phase_steps: int = PHASE_STEPS, task=None, rng=None):
+        super().__init__(family, task)
+        if rng is None and seed is None:
+            raise ValueError("SerialSearch needs a seed (randomness is explicit)")
         if n_working < 1 or n_generations < 0 or reseed_every < 1:
             raise ValueError("need n_working >= 1, n_generations >= 0, "
                              "reseed_every >= 1")
-        self.rng = rng if isinstance(rng, np.random.Generator) \
-            else np.random.default_rng(rng)
-        self.init_fn, self.mutate_fn = init_fn, mutate_fn
+        if isinstance(phase_steps, bool) or not isinstance(phase_steps, (int, np.integer)) \
+                or phase_steps < 1:
+            raise ValueError(f"phase_steps must be an integer >= 1, got {phase_steps!r}")
+        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(seed)
         self.n_working, self.n_generations = int(n_working), int(n_generations)
         self.reseed_every = int(reseed_every)
-        self.maximize, self.accept_ties = bool(maximize), bool(accept_ties)
-        self.genome_to_json, self.genome_from_json = genome_to_json, genome_from_json
-        self.phase_fn = phase_fn
+        self.accept_ties = bool(accept_ties)
+        self.phase_steps = int(phase_steps)
         self.phase = None              # phase the working scores and best_score are of
         self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
@@ -104,16 +128,29 @@ class SerialSearch:
         self.scores = None             # float64[C], as told
         self.extras = None
         self.pending = None            # candidates handed out by ask()
-        self.best_genome, self.best_score = None, -math.inf if maximize else math.inf
+        self.best_genome, self.best_score = None, math.inf
         self.history: list[tuple[int, float]] = []
 
+    # -- progress ------------------------------------------------------------
+    def progress_of(self, generation: int) -> float:
+        n = self.schedule or self.n_generations     # an extension keeps the schedule
+        return serial_progress(generation, n, self.phase_steps)
+
+    @property
+    def total(self) -> int:
+        return self.n_generations
+
+    def extend(self, total: int, schedule: int) -> None:
+        """Run to ``total`` rounds; progress keeps spanning ``schedule`` rounds."""
+        self.schedule = schedule
+        self.n_generations = max(self.n_generations, total)
+
     # -- ordering -----------------------------------------------------------
-    def _key(self, score):
-        """Larger is better; NaN/inf-nonsense becomes the worst."""
-        s = float(score)
+    def _key(self, cost):
+        """Larger is better (a negated cost); NaN and ±inf become the worst."""
+        s = -float(cost)
         if math.isnan(s):
             return -math.inf
-        s = s if self.maximize else -s
         return s if s != math.inf else -math.inf
 
     def _better(self, new, old, ties=False):
@@ -125,35 +162,36 @@ class SerialSearch:
     def done(self) -> bool:
         return self.working is not None and self.generation >= self.n_generations
 
-    def ask(self) -> list:
+    def _ask(self) -> list:
         """Candidates to evaluate; asking again before ``tell`` repeats them."""
         if self.done:
-            raise RuntimeError("serial search finished; read best_genome")
+            raise RuntimeError("serial search finished; read best")
         if self.pending is None:
+            copy = self.family.copy
             if self.working is None:
-                self.pending = [self.init_fn(self.rng) for _ in range(self.n_working)]
+                self.pending = [self.family.random(self.rng) for _ in range(self.n_working)]
             elif self._stale():
-                self.pending = [_copy(g) for g in self.working] + [_copy(self.best_genome)]
+                self.pending = [copy(g) for g in self.working] + [copy(self.best_genome)]
                 self.rescoring = True
             else:
-                self.pending = [self.mutate_fn(g, self.rng, e)
+                self.pending = [self.family.mutate(g, self.rng, e)
                                 for g, e in zip(self.working, self.extras)]
         return list(self.pending)
 
-    def current_phase(self):
-        """Phase of the round ``ask`` hands out next (None without ``phase_fn``)."""
-        return None if self.phase_fn is None else tuple(self.phase_fn(self.generation))
+    def current_phase(self) -> tuple:
+        """Phase of the round ``ask`` hands out next."""
+        return self.phase_of(self.generation)
 
     def _stale(self) -> bool:
-        return self.phase_fn is not None and self.current_phase() != self.phase
+        return self.current_phase() != self.phase
 
-    def tell(self, scores, extras=None) -> None:
-        """Scores (and optional extras) for the candidates of the last ask."""
+    def _tell(self, ev) -> None:
+        """Costs (and extras) for the candidates of the last ask."""
         if self.pending is None:
             raise RuntimeError("tell() without a pending ask()")
-        scores = np.array(scores, dtype=np.float64).ravel()
+        scores = np.array(ev.costs, dtype=np.float64).ravel()
         n = len(self.pending)
-        extras = [None] * n if extras is None else list(extras)
+        extras = [None] * n if ev.extras is None else list(ev.extras)
         if scores.size != n or len(extras) != n:
             raise ValueError(f"tell: expected {n} scores and extras, got "
                              f"{scores.size} and {len(extras)}")
@@ -173,7 +211,7 @@ class SerialSearch:
         self.evaluations += n
         i = max(range(n), key=lambda k: (self._key(self.scores[k]), -k))
         if self.best_genome is None or self._better(self.scores[i], self.best_score):
-            self.best_genome, self.best_score = _copy(self.working[i]), float(self.scores[i])
+            self.best_genome, self.best_score = self.family.copy(self.working[i]), float(self.scores[i])
         if self.generation > 0 and self.generation % self.reseed_every == 0:
             self._reseed()
         self.history.append((self.evaluations, self.best_score))
@@ -185,7 +223,7 @@ class SerialSearch:
         self.best_score = float(scores[c])
         i = max(range(c), key=lambda k: (self._key(self.scores[k]), -k))
         if self._better(self.scores[i], self.best_score):
-            self.best_genome, self.best_score = _copy(self.working[i]), float(self.scores[i])
+            self.best_genome, self.best_score = self.family.copy(self.working[i]), float(self.scores[i])
         self.phase, self.rescoring, self.pending = self.current_phase(), False, None
         self.evaluations += c + 1
         self.history.append((self.evaluations, self.best_score))
@@ -197,19 +235,42 @@ class SerialSearch:
         half = self.n_working // 2
         for k in range(half):
             dst, src = order[self.n_working - half + k], order[k]
-            self.working[dst] = _copy(self.working[src])
+            self.working[dst] = self.family.copy(self.working[src])
             self.scores[dst] = self.scores[src]
             self.extras[dst] = self.extras[src]
 
+    # -- what the run loop reads ----------------------------------------------
+    def _own_best(self) -> tuple:
+        return self.best_genome, self.best_score
+
+    def _row_costs(self, ev) -> tuple:
+        return self.generation, np.asarray(ev.costs, dtype=np.float64)
+
+    def logged_generation(self) -> int:
+        return self.generation
+
+    def check_restored(self) -> None:
+        n = None if self.working is None else len(self.working)
+        sizes = [("working set", n, self.n_working if n is not None else None),
+                 ("scores", None if self.scores is None else len(self.scores), n)]
+        for what, have, want in sizes:
+            if have != want:
+                raise ValueError(f"its {what} has {have} entries, the settings say {want}")
+
+    def config(self) -> dict:
+        """The settings a checkpoint records (phase_steps is config.json's alone;
+        ``maximize`` is always false: kept for the checkpoint format)."""
+        return {"n_working": self.n_working, "n_generations": self.n_generations,
+                "reseed_every": self.reseed_every, "maximize": False,
+                "accept_ties": self.accept_ties}
+
     # -- checkpoints ---------------------------------------------------------
-    def state_dict(self) -> dict:
+    def _state(self) -> dict:
         """JSON-safe snapshot: config, working set, pending, rng, history."""
-        enc = self.genome_to_json
+        enc = self.family.to_json
         return {
             "format": STATE_FORMAT,
-            "config": {"n_working": self.n_working, "n_generations": self.n_generations,
-                       "reseed_every": self.reseed_every, "maximize": self.maximize,
-                       "accept_ties": self.accept_ties},
+            "config": self.config(),
             "generation": self.generation, "evaluations": self.evaluations,
             "rng": self.rng.bit_generator.state,
             "working": None if self.working is None else [enc(g) for g in self.working],
@@ -223,7 +284,7 @@ class SerialSearch:
             "history": [[int(e), _score_to_json(b)] for e, b in self.history],
         }
 
-    def load_state_dict(self, state: dict) -> None:
+    def _load(self, state: dict) -> None:
         """Restore a :meth:`state_dict` snapshot (config included)."""
         if not isinstance(state, dict) or state.get("format") not in (STATE_FORMAT, *OLD_FORMATS):
             raise ValueError(f"not a {STATE_FORMAT} checkpoint")
@@ -231,13 +292,14 @@ class SerialSearch:
         if name != self.rng.bit_generator.state["bit_generator"]:
             raise ValueError(f"checkpoint rng is {name}, search uses "
                              f"{self.rng.bit_generator.state['bit_generator']}")
-        worst = -math.inf if state["config"]["maximize"] else math.inf
-        num = lambda x: worst if x is None else float(x)  # noqa: E731
-        dec = self.genome_from_json
         cfg = state["config"]
+        if cfg.get("maximize"):
+            raise ValueError("checkpoint of a maximizing serial search; this one minimizes costs")
+        num = lambda x: math.inf if x is None else float(x)  # noqa: E731
+        dec = self.family.from_json
         self.n_working, self.n_generations = int(cfg["n_working"]), int(cfg["n_generations"])
         self.reseed_every = int(cfg["reseed_every"])
-        self.maximize, self.accept_ties = bool(cfg["maximize"]), bool(cfg["accept_ties"])
+        self.accept_ties = bool(cfg["accept_ties"])
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.rng.bit_generator.state = state["rng"]
         opt = lambda xs, f: None if xs is None else [f(x) for x in xs]  # noqa: E731

@@ -1,9 +1,10 @@
-"""DEAP operators on Gritz-Hahn individuals, and a ready DEAP toolbox.
+"""DEAP operators on Gritz-Hahn individuals (the representation's variation
+and selection; nothing here runs a simulation).
 
 An individual is a list of trees, one per controlled DOF (actuator).  The
 operators here are shared by :class:`gpmotion.search.gp.GPSearch` and by
-:func:`make_toolbox`, for DEAP users who prefer their own loop
-(``deap.algorithms.eaSimple`` works out of the box, see
+:func:`gpmotion.toolbox.make_toolbox`, for DEAP users who prefer their
+own loop (``deap.algorithms.eaSimple`` works out of the box, see
 ``examples/deap_easimple.py``).
 
 Why these choices:
@@ -35,19 +36,13 @@ from __future__ import annotations
 
 import bisect
 import functools
-import math
 import operator
 import random
-from typing import Sequence
 
 import numpy as np
-from deap import base, creator, gp, tools
+from deap import gp
 
-from gpmotion.gp.bytecode import MAX_TREE_DEPTH, is_erc
-from gpmotion.task import WORST
-
-FITNESS_CLASS = "GPMotionFitnessMin"
-INDIVIDUAL_CLASS = "GPMotionIndividual"
+from .bytecode import MAX_TREE_DEPTH, is_erc
 
 
 # ------------------------------------------------------------- tree operators
@@ -148,102 +143,3 @@ def tournament_indices(costs, k: int, size: int) -> list[int]:
         entrants = [random.randrange(n) for _ in range(size)]
         out.append(min(entrants, key=lambda i: costs[i]))
     return out
-
-
-# --------------------------------------------------------------- DEAP toolbox
-
-def _creator_classes():
-    """Create the creator classes once per process (DEAP warns on re-creation)."""
-    if not hasattr(creator, FITNESS_CLASS):
-        creator.create(FITNESS_CLASS, base.Fitness, weights=(-1.0,))
-    if not hasattr(creator, INDIVIDUAL_CLASS):
-        creator.create(INDIVIDUAL_CLASS, list, fitness=getattr(creator, FITNESS_CLASS))
-    return getattr(creator, FITNESS_CLASS), getattr(creator, INDIVIDUAL_CLASS)
-
-
-def _select(individuals, k, method="roulette", tournament_size=7):
-    costs = [ind.fitness.values[0] for ind in individuals]
-    idx = (roulette_indices(costs, k) if method == "roulette"
-           else tournament_indices(costs, k, tournament_size))
-    return [individuals[i] for i in idx]
-
-
-def make_toolbox(task, family=None, *, evaluator=None, init_depth=(2, 6),
-                 max_depth: int = MAX_TREE_DEPTH, max_size: int = 200,
-                 selection: str = "roulette", tournament_size: int = 7,
-                 generations: int | None = None, progress: float = 1.0) -> base.Toolbox:
-    """A DEAP toolbox over lists of trees (one per actuator) for ``task``.
-
-    Registers ``expr``, ``tree``, ``individual``, ``population``, ``mate``,
-    ``mutate``, ``select``, ``evaluate`` (ONE individual -> ``(cost,)``) and a
-    ``map`` that batches ``evaluate`` into one rollout (so ``eaSimple``'s
-    ``toolbox.map(toolbox.evaluate, invalid)`` is one batched simulation);
-    any other function is mapped plainly.
-
-    Style phase-in: with ``generations`` given, every batched evaluation
-    counts as one generation and ``progress = min(1, batch / generations)``
-    (``eaSimple`` evaluates once per generation); otherwise ``progress`` stays
-    fixed.  Note ``eaSimple`` does not re-score unchanged copies, so their
-    costs may date from an earlier phase; ``GPSearch`` handles that.
-    """
-    from gpmotion.evaluate import InProcessEvaluator
-    from gpmotion.families import make_family
-    if selection not in ("roulette", "tournament"):
-        raise ValueError(f"selection must be 'roulette' or 'tournament', got {selection!r}")
-    family = family or make_family("gp", task)
-    evaluator = evaluator or InProcessEvaluator(task, family)
-    _, Individual = _creator_classes()
-    pset = family.pset
-    n_trees = len(family.actuators)
-    tree_cx, tree_mut = make_tree_operators(pset, max_depth, max_size)
-
-    tb = base.Toolbox()
-    tb.family, tb.evaluator = family, evaluator
-    tb.generations, tb.progress, tb.batches = generations, float(progress), 0
-    tb.register("expr", gp.genHalfAndHalf, pset=pset, min_=init_depth[0], max_=init_depth[1])
-    tb.register("tree", random_tree, pset, tuple(init_depth), max_depth, max_size)
-    tb.register("individual", tools.initRepeat, Individual, tb.tree, n=n_trees)
-    tb.register("population", tools.initRepeat, list, tb.individual)
-    tb.register("mate", lambda a, b: crossover_same_dof(a, b, tree_cx)[:2])
-    tb.register("mutate", lambda ind: (mutate_one_dof(ind, tree_mut)[0],))
-    tb.register("select", _select, method=selection, tournament_size=tournament_size)
-    tb.register("compile", gp.compile, pset=pset)
-
-    def evaluate_one(individual):
-        return (float(evaluate_population(tb, [individual], tb.progress, assign=False).costs[0]),)
-
-    def batched_map(func, *iterables):
-        if getattr(func, "func", func) is evaluate_one:       # our evaluate: one rollout
-            inds = list(iterables[0])
-            if tb.generations:
-                tb.progress = min(1.0, tb.batches / tb.generations)
-            tb.batches += 1
-            costs = evaluate_population(tb, inds, tb.progress, assign=False).costs
-            return [(float(c),) for c in costs]
-        return list(map(func, *iterables))
-
-    tb.register("evaluate", evaluate_one)
-    tb.register("map", batched_map)
-    return tb
-
-
-def evaluate_population(toolbox_or_family, individuals: Sequence, progress: float = 1.0,
-                        assign: bool = True):
-    """Evaluate many individuals in one batched rollout; returns the ``Evaluation``.
-
-    With ``assign`` each individual that has a ``fitness`` gets ``(cost,)``.
-    Accepts a toolbox from :func:`make_toolbox` (its evaluator) or a family
-    (an in-process evaluator is built for ``family.task``).
-    """
-    from gpmotion.evaluate import InProcessEvaluator
-    ev = getattr(toolbox_or_family, "evaluator", None)
-    if ev is None:
-        fam = toolbox_or_family
-        ev = InProcessEvaluator(fam.task, fam)
-    individuals = list(individuals)
-    result = ev.evaluate(individuals, progress)
-    if assign:
-        for ind, c in zip(individuals, result.costs):
-            if hasattr(ind, "fitness"):
-                ind.fitness.values = (float(c) if math.isfinite(c) else WORST,)
-    return result

@@ -1,8 +1,11 @@
-"""One evaluation interface, ``evaluate(genomes) -> Evaluation``, for every search.
+"""The in-process evaluator, and what a worker process runs.
 
-In-process evaluation runs the whole batch in one numba rollout over all
-threads.  Other backends (process pool, Dask) split genomes into chunks and
-call :func:`evaluate_chunk` remotely with plain data only.
+Every evaluator has one interface, ``evaluate(genomes, progress) ->``
+:class:`~gpmotion.evaluation.Evaluation`.  In-process evaluation runs the
+whole batch in one numba rollout over all threads.  The other backends
+(:mod:`gpmotion.evaluators`: process pool, Dask) split genomes into chunks
+and call :func:`evaluate_chunk` in their workers with plain data only: a
+worker is an in-process evaluator rebuilt from :func:`spec_of`.
 """
 from __future__ import annotations
 
@@ -10,28 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .evaluation import Evaluation
 from .families import Family, make_family
 from .sim.rollout import rollout
 from .task import Task, get_task
-
-
-@dataclass
-class Evaluation:
-    """Scores of a batch: costs (lower is better) and why."""
-    costs: np.ndarray                    # float64[n]
-    success: np.ndarray                  # bool[n]
-    failed: np.ndarray                   # bool[n] diverged simulations
-    measures: dict[str, np.ndarray]      # raw term values [n]
-    extras: list | None = None           # per-genome normalized sense trajectories (BSR)
-
-    @staticmethod
-    def concat(parts: list["Evaluation"]) -> "Evaluation":
-        extras = None if any(p.extras is None for p in parts) else [x for p in parts for x in p.extras]
-        return Evaluation(np.concatenate([p.costs for p in parts]),
-                          np.concatenate([p.success for p in parts]),
-                          np.concatenate([p.failed for p in parts]),
-                          {k: np.concatenate([p.measures[k] for p in parts]) for k in parts[0].measures},
-                          extras)
 
 
 @dataclass
@@ -75,9 +60,7 @@ class InProcessEvaluator:
             return batch_evaluation(self, genomes, progress, generation)
         traj = self.rollout(genomes, progress=progress)
         costs, measures, ok = self.task.score(traj, progress)
-        extras = None
-        if self.family.needs_senses:
-            extras = [self.family.normalized(traj.senses[e]) for e in range(len(genomes))]
+        extras = self.family.extras(traj)
         self.evaluations += len(genomes)
         return Evaluation(costs, ok, traj.diverged.copy(), measures, extras)
 

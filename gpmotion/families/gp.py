@@ -1,0 +1,220 @@
+"""The GP family (Gritz & Hahn): one parse tree per controlled actuator.
+
+A genome is a list of token lists (``gpmotion.gp.bytecode``), one per
+controlled actuator; it compiles to postfix bytecode the rollout kernel
+interprets.  Its search is :class:`gpmotion.search.gp.GPSearch` (DEAP's
+operators on the trees), its presets are :mod:`gpmotion.gp.presets`.
+"""
+from __future__ import annotations
+
+import math
+import random
+
+import numpy as np
+from deap import gp
+
+from .. import cli_options
+from ..cli_options import Option, number
+from ..gp import bytecode
+from ..gp.operators import random_tree
+from ..gp.pset import build_pset
+from ..gp.subgoals import subgoal_table, task_subgoals
+from ..search.gp import GPSearch
+from .base import Family, register_family
+
+# Gritz & Hahn: crossover-dominant, little mutation, fitness-proportionate
+# selection; we keep one elite so the best is never lost.  A task may raise
+# them (Task.gp_defaults: herman's population).
+GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0.02,
+                   selection="roulette", elitism=1)
+BUDGET_POPULATION = 100            # compare's default population under a budget
+
+
+def _primitives(flag, text):
+    from ..gp import primitives
+    primitives.load_builtin()
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise ValueError(f"{flag}: give a comma list of primitive names (gpmotion list primitives)")
+    if len(set(names)) != len(names):
+        raise ValueError(f"{flag}: a primitive is named twice in {text!r}")
+    for n in names:
+        primitives.get(n)                  # unknown: one line with a suggestion
+    return names
+
+
+def _range(flag, text):
+    parts = text.split(",")
+    try:
+        lo, hi = (float(x) for x in parts)
+    except ValueError:
+        raise ValueError(f"{flag} expects LO,HI (two numbers), got {text!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and max(-lo, hi) <= 1e6):
+        raise ValueError(f"{flag}: need finite LO < HI within ±1e6, got {text!r}")
+    return [lo, hi]
+
+
+def _kinematic_only(args, family):
+    from .base import family_class
+    act = args.actuation or family_class(family).default_actuation
+    if act != "kinematic":
+        return (f"it is the time constant of kinematic actuation, and this run uses {act} "
+                "(add --actuation kinematic)")
+    return None
+
+
+def _gp_option(flag, target, key, help, what, argparse, check=None, needs=None):
+    cli_options.register_option(Option(flag, target, {}, help, what, argparse, check, needs))
+    return flag, key
+
+
+_OWN = dict([
+    _gp_option("--selection", "search", "selection",
+               "GP selection (default roulette, fitness-proportionate)", "GP parent selection",
+               dict(choices=["roulette", "tournament"])),
+    _gp_option("--p-crossover", "search", "p_crossover", "GP crossover probability (default 0.9)",
+               "a GP breeding probability", dict(type=float), number(0, 1)),
+    _gp_option("--p-mutation", "search", "p_mutation", "GP mutation probability (default 0.02)",
+               "a GP breeding probability", dict(type=float), number(0, 1)),
+    _gp_option("--p-creep", "search", "p_creep",
+               "GP constant-creep probability: Gaussian steps on one tree's constants "
+               "(default 0, herman tasks 0.1)", "a GP breeding probability",
+               dict(type=float), number(0, 1)),
+    _gp_option("--islands", "search", "islands",
+               "GP island model: demes that breed apart and pass their best around a ring "
+               "every 5 generations (default 1)", "the GP island model", dict(type=int),
+               number(1, 10_000, True)),
+    _gp_option("--elitism", "search", "elitism", "GP elites copied unchanged (default 1)",
+               "the GP elite count", dict(type=int), number(0, 10**6, True)),
+    _gp_option("--max-size", "search", "max_size", "GP nodes per tree cap (default 200)",
+               "the GP tree-size cap", dict(type=int), number(1, 512, True)),
+    _gp_option("--primitives", "family", "primitives",
+               "GP function set, a comma list (default: the task's own set, shown by "
+               "gpmotion show TASK; names: gpmotion list primitives)", "the GP function set",
+               dict(type=str, metavar="NAME,..."), _primitives),
+    _gp_option("--erc-range", "family", "erc_range",
+               "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",
+               "the range of GP random constants", dict(type=str, metavar="LO,HI"), _range),
+    _gp_option("--tau", "family", "tau",
+               "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
+               "the GP target time constant", dict(type=float), number(0.002, 10),
+               _kinematic_only),
+])
+
+
+def _check_erc_range(r):
+    """Random constants are drawn uniformly from [lo, hi]: two finite numbers, lo < hi."""
+    ok = (isinstance(r, (list, tuple)) and len(r) == 2
+          and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r))
+    if not ok or not (np.all(np.isfinite(r)) and -1e6 <= r[0] < r[1] <= 1e6):
+        raise ValueError(f"erc_range must be [lo, hi] with finite lo < hi within ±1e6, got {r!r}")
+
+
+@register_family
+class GPFamily(Family):
+    """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
+    name = "gp"
+    description = "Gritz & Hahn: one GP parse tree per controlled joint, evolved with DEAP"
+    search_class = GPSearch
+    cli = {"--generations": "generations", "--population": "population", **_OWN}
+    takes_population = True
+    plot_file = "trees.png"
+
+    def __init__(self, task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
+                 terminals=None, subgoals=False, **options):
+        # tau: the fixed time constant of GP targets under `kinematic` actuation
+        # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair);
+        # terminals: sense names replacing the task's terminal set (a preset's);
+        # subgoals: add the task's subgoal flags as terminals (gpmotion.gp.subgoals)
+        super().__init__(task, primitives=list(primitives) if primitives else None,
+                         erc_range=list(erc_range), tau=float(tau), **options)
+        if terminals is not None:
+            self.options["terminals"] = list(terminals)
+        goals = task_subgoals(task) if subgoals else ()
+        if subgoals:
+            self.options["subgoals"] = True
+        self.subgoal_table = subgoal_table(goals, task.figure.sense_names)
+        if not 0.002 <= self.options["tau"] <= 10:
+            raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
+        _check_erc_range(self.options["erc_range"])
+        self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
+                               primitives or task.primitives,     # the task names its set
+                               sense_names=task.figure.sense_names, erc_range=tuple(erc_range),
+                               flag_names=[g.name for g in goals])
+        self.actuators = task.controlled_actuators()
+
+    @property
+    def pset(self):
+        return self.info.pset
+
+    def random(self, rng):
+        """Ramped half-and-half trees (depth 2..6), as GPSearch's first generation
+        draws them.  DEAP draws from Python's ``random``: seeded here from
+        ``rng``, the caller's state put back."""
+        outer = random.getstate()
+        random.seed(int(rng.integers(2**63)))
+        try:
+            return [bytecode.tree_to_tokens(random_tree(self.pset, (2, 6), bytecode.MAX_TREE_DEPTH,
+                                                        200)) for _ in self.actuators]
+        finally:
+            random.setstate(outer)
+
+    def encode(self, genomes):
+        return bytecode.encode_batch(list(genomes), self.info, self.actuators,
+                                     subgoals=self.subgoal_table)
+
+    def copy(self, genome):
+        return [list(t) for t in genome]
+
+    def to_json(self, genome):
+        return {"kind": "gp", "pset": self.info.hash,
+                "trees": [bytecode.tree_to_tokens(t) if isinstance(t, gp.PrimitiveTree) else list(t)
+                          for t in genome]}
+
+    def from_json(self, data):
+        if not isinstance(data, dict) or data.get("kind") != "gp" or not isinstance(data.get("trees"), list):
+            raise ValueError("not a GP controller (expected kind 'gp' with a list of trees)")
+        trees = data["trees"]
+        if len(trees) != len(self.actuators):
+            raise ValueError(f"controller has {len(trees)} trees but {self.task.figure.name} has "
+                             f"{len(self.actuators)} actuated joints")
+        for t in trees:                       # validate: whitelist, size and depth caps
+            bytecode.tokens_to_tree(t, self.info)
+        return [list(t) for t in trees]
+
+    def plot(self, path, genome) -> None:
+        from ..treeplot import plot_trees
+        names = [self.task.figure.actuator_names[i] for i in self.actuators]
+        plot_trees(path, self.to_json(genome)["trees"], titles=names,
+                   suptitle=f"{self.task.name} ({self.name})")
+
+    # -- search ----------------------------------------------------------------
+    @classmethod
+    def search_defaults(cls, task) -> dict:
+        return {**GP_DEFAULTS, **task.gp_defaults}
+
+    def make_search(self, seed: int, **settings):
+        """GPSearch; ring migration fitted to small islands (the user cannot set
+        ``migrants``; its default 2 needs islands of 4)."""
+        opts = {k: v for k, v in settings.items() if v is not None}
+        if "migrants" not in opts:
+            pop = opts.get("population", self.search_defaults(self.task)["population"])
+            islands = opts.get("islands", 1)
+            if isinstance(pop, int) and isinstance(islands, int) and islands >= 1:
+                opts["migrants"] = min(2, pop // islands // 2)
+        return super().make_search(seed, **opts)
+
+    def noisy_settings(self) -> dict:
+        return {"reuse_costs": False}          # copies are re-evaluated on the new starts
+
+    def budget_settings(self, budget: int, population: int | None = None) -> dict:
+        pop = min(population or BUDGET_POPULATION, budget)
+        return {"population": pop, "generations": max(1, budget // pop - 1)}
+
+    presets = ("default", "gritz-hahn")
+
+    @classmethod
+    def apply_preset(cls, name, task_name, family_options, search):
+        from ..gp.presets import apply_preset
+        from ..task import get_task
+        return apply_preset(name, get_task(task_name) if name else None, family_options, search)
