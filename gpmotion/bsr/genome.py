@@ -76,6 +76,15 @@ def _in_range(name, a, lo, hi):
                          f"(min {a.min()}, max {a.max()})")
 
 
+def _response_arrays(g) -> None:
+    """Make a genome's response part (θ₀, τ) and its ranges float arrays, checked."""
+    g.theta0 = _array("theta0", g.theta0, 2)
+    g.tau = _array("tau", g.tau, 1)
+    g.limits = _array("limits", g.limits, 2)
+    g.tau_range = _array("tau_range", g.tau_range, 1)
+    _check_response(g.theta0, g.tau, g.limits, g.tau_range)
+
+
 def _check_response(theta0, tau, limits, tau_range):
     """Shared checks of the response part (θ₀, τ) and its ranges."""
     n_rules, n_act = theta0.shape
@@ -135,11 +144,7 @@ class SenseGenome:
     def __post_init__(self):
         self.mu = _array("mu", self.mu, 2)
         self.lam = _array("lam", self.lam, 2)
-        self.theta0 = _array("theta0", self.theta0, 2)
-        self.tau = _array("tau", self.tau, 1)
-        self.limits = _array("limits", self.limits, 2)
-        self.tau_range = _array("tau_range", self.tau_range, 1)
-        _check_response(self.theta0, self.tau, self.limits, self.tau_range)
+        _response_arrays(self)
         shape = (self.theta0.shape[0], self.mu.shape[1])
         if self.mu.shape != shape or self.lam.shape != shape or shape[1] < 1:
             raise ValueError(f"mu and lam must both have shape (n_rules, V) = "
@@ -198,11 +203,7 @@ class TimeGenome:
     kind = "time"
 
     def __post_init__(self):
-        self.theta0 = _array("theta0", self.theta0, 2)
-        self.tau = _array("tau", self.tau, 1)
-        self.limits = _array("limits", self.limits, 2)
-        self.tau_range = _array("tau_range", self.tau_range, 1)
-        _check_response(self.theta0, self.tau, self.limits, self.tau_range)
+        _response_arrays(self)
         t_per = _array("t_per", self.t_per, 0)
         if not t_per > 0.0:
             raise ValueError(f"t_per must be > 0, got {float(t_per)}")
