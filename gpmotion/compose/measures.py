@@ -124,10 +124,6 @@ class Measure:
     fn: Callable        # (ctx, window) -> array [E, F|1, n|1]
 
 
-def _com(i):
-    return lambda c, w: c.signal(c.traj.com[..., i])
-
-
 def _com_index(traj, axis: str) -> int:
     """Column of the com channel: planar (x, z, vx, vz), 3-D (x, y, z, vx, vy, vz)."""
     cols = ("x", "y", "z", "vx", "vy", "vz") if traj.is3d else ("x", "z", "vx", "vz")
@@ -171,13 +167,19 @@ def _speed(c, w):
     return c.signal(np.linalg.norm(v, axis=-1))
 
 
+# the centre of mass per axis: its change over a window (a number) and its value per frame
+_COM_CHANGES = {"x": "centre-of-mass x displacement over the window (m) — Δcm_x",
+                "y": "centre-of-mass y displacement (m; 3-D figures)",
+                "z": "centre-of-mass height change over the window (m)"}
+_COM_CHANNELS = {"x": "centre-of-mass x (m)", "y": "centre-of-mass y (m; 3-D figures)",
+                 "z": "centre-of-mass height (m)", "vx": "centre-of-mass x velocity (m/s)",
+                 "vz": "centre-of-mass vertical velocity (m/s)"}
+
 MEASURES: dict[str, Measure] = {
     # numbers per window
     "dtime": Measure(NUMBER, "duration of the window (s) — the paper's Δtime",
                      lambda c, w: c.number((w.end - w.start) * c.traj.dt * c.traj.record_every)),
-    "dcm_x": Measure(NUMBER, "centre-of-mass x displacement over the window (m) — Δcm_x", _dcm("x")),
-    "dcm_y": Measure(NUMBER, "centre-of-mass y displacement (m; 3-D figures)", _dcm("y")),
-    "dcm_z": Measure(NUMBER, "centre-of-mass height change over the window (m)", _dcm("z")),
+    **{f"dcm_{a}": Measure(NUMBER, doc, _dcm(a)) for a, doc in _COM_CHANGES.items()},
     "rotations": Measure(NUMBER, "whole-body turns of the base pitch, fractional (planar; Table 3)", _rotations),
     "contact_distance": Measure(NUMBER, "m slid by contact points touching the ground (Table 3)", _contact_distance),
     "max_height": Measure(NUMBER, "highest centre-of-mass height in the window (m; Table 3)",
@@ -191,11 +193,7 @@ MEASURES: dict[str, Measure] = {
     "t": Measure(SIGNAL, "time since the window began (s)",
                  lambda c, w: c.signal(c.traj.times[None, :] - c.traj.times[w.start][:, None])),
     "time": Measure(SIGNAL, "time since the motion began (s)", lambda c, w: c.signal(c.traj.times[None, :])),
-    "cm_x": Measure(SIGNAL, "centre-of-mass x (m)", _com_axis("x")),
-    "cm_y": Measure(SIGNAL, "centre-of-mass y (m; 3-D figures)", _com_axis("y")),
-    "cm_z": Measure(SIGNAL, "centre-of-mass height (m)", _com_axis("z")),
-    "cm_vx": Measure(SIGNAL, "centre-of-mass x velocity (m/s)", _com_axis("vx")),
-    "cm_vz": Measure(SIGNAL, "centre-of-mass vertical velocity (m/s)", _com_axis("vz")),
+    **{f"cm_{a}": Measure(SIGNAL, doc, _com_axis(a)) for a, doc in _COM_CHANNELS.items()},
     "speed": Measure(SIGNAL, "centre-of-mass speed (m/s)", _speed),
     "pitch": Measure(SIGNAL, "base pitch, unwrapped (rad; planar)", _pitch),
     "airborne": Measure(SIGNAL, "1 when no contact point touches the ground",
