@@ -35,6 +35,16 @@ DISTANCE = Term("distance", -1.0, main=True, doc="com displacement along the sta
 SIDEWAYS = Term("sideways", 1.0, param="w_sideways", doc="|com displacement across the start heading| (m)")
 FALL = Term("fall", 1.0, param="w_fall", doc="fraction of the episode fallen")
 
+# how each fact of an episode reads in a report (``CreatureTask.facts`` picks them)
+FACTS = {
+    "forward": lambda m, e: f"forward {m['distance'][e]:.2f} m",
+    "sideways": lambda m, e: f"sideways {m['sideways'][e]:.2f} m",
+    "heading": lambda m, e: f"heading change {np.degrees(m['turn'][e]):.0f}°",
+    "rotation": lambda m, e: f"rotation {np.degrees(m['rotation'][e]):.0f}°",
+    "steps": lambda m, e: f"{int(m['steps'][e])} forward steps",
+    "fallen": lambda m, e: f"fallen {100 * m['fall'][e]:.0f}% of the time",
+}
+
 
 def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX_TILT,
                       min_height=s3.MIN_HEIGHT) -> dict[str, np.ndarray]:
@@ -71,6 +81,7 @@ class CreatureTask(Task):
     foot_groups: tuple[tuple[str, ...], ...] = ()
     max_tilt = s3.MAX_TILT          # fallen: root tilted further (rad) ...
     min_height = s3.MIN_HEIGHT      # ... or com below this fraction of its start height
+    facts: tuple[str, ...] = ()     # what describe() reports, in order (FACTS)
     record_every = RECORD_EVERY
     param_docs = {"seconds": "episode length (s)",
                   "w_sideways": "penalty per m of sideways com motion",
@@ -94,6 +105,9 @@ class CreatureTask(Task):
     def measure(self, traj):
         return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups,
                                  self.max_tilt, self.min_height)
+
+    def describe(self, traj, m, e=0):
+        return [", ".join(FACTS[f](m, e) for f in self.facts)]
 
     def terminal_names(self) -> list[str]:
         """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):

@@ -33,11 +33,7 @@ class BobWalk(CreatureTask):
              SIDEWAYS, FALL,
              Term("rotation", 1.0, param="w_rotation", doc="|net rotation about the vertical| (rad)"))
     success_threshold = "≥ 5 forward steps before falling, facing forward"
+    facts = ("steps", "forward", "sideways", "rotation", "fallen")
 
     def success(self, traj, m):
         return m["steps"] >= self.params["success_steps"]
-
-    def describe(self, traj, m, e=0):
-        return [f"{int(m['steps'][e])} forward steps, forward {m['distance'][e]:.2f} m, "
-                f"sideways {m['sideways'][e]:.2f} m, rotation {m['rotation'][e] * 57.2958:.0f}°, "
-                f"fallen {100 * m['fall'][e]:.0f}% of the time"]

@@ -20,10 +20,7 @@ class RexTurn(RexTask):
                   "success_degrees": "heading change that counts as solved (°)"}
     terms = (Term("turn", -1.0, main=True, doc="|change of heading| (rad)"), *RexTask.penalties)
     success_threshold = "heading changes ≥ 45°, never fallen"
+    facts = ("heading", "forward", "fallen")
 
     def success(self, traj, m):
         return (m["turn"] >= np.radians(self.params["success_degrees"])) & (m["fall"] == 0)
-
-    def describe(self, traj, m, e=0):
-        return [f"heading change {np.degrees(m['turn'][e]):.0f}°, forward {m['distance'][e]:.2f} m, "
-                f"fallen {100 * m['fall'][e]:.0f}% of the time"]

@@ -35,11 +35,7 @@ class RexWalk(RexTask):
     param_docs = {**RexTask.param_docs, "success_distance": "com travel that counts as solved (m)"}
     terms = (DISTANCE, *RexTask.penalties)
     success_threshold = "com ≥ 1 m forward, never fallen"
+    facts = ("forward", "sideways", "heading", "steps", "fallen")
 
     def success(self, traj, m):
         return (m["distance"] >= self.params["success_distance"]) & (m["fall"] == 0)
-
-    def describe(self, traj, m, e=0):
-        return [f"forward {m['distance'][e]:.2f} m, sideways {m['sideways'][e]:.2f} m, "
-                f"heading change {m['turn'][e] * 57.2958:.0f}°, steps {int(m['steps'][e])}, "
-                f"fallen {100 * m['fall'][e]:.0f}% of the time"]
