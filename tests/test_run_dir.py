@@ -11,7 +11,7 @@ from gpmotion import records, rundir
 from gpmotion.cli import main
 from gpmotion.records import FormatError, RunDirError
 from gpmotion.rundir import RunDir, display_path
-from tests.cli_checks import one_line_error, refused, refused_before_the_directory
+from tests.cli_checks import refused, refused_before_the_directory
 
 GP = ["--param", "seconds=0.3", "--population", "8", "--generations", "3", "--quiet",
       "--no-artifacts"]
@@ -65,6 +65,14 @@ def outside(tmp_path):
     return f
 
 
+def planted(tmp_path, outside, name):
+    """A new run directory (and its path) whose file ``name`` is a symbolic link to ``outside``."""
+    d = tmp_path / "r"
+    rd = RunDir.create(d)
+    os.symlink(outside, d / name)
+    return rd, d
+
+
 def test_planted_lock_symlink_is_not_followed(tmp_path, outside):
     d = tmp_path / "r"
     d.mkdir()
@@ -84,9 +92,7 @@ def test_write_probe_truncates_nothing(tmp_path, outside):
 
 
 def test_planted_log_symlink_is_neither_appended_nor_trimmed(tmp_path, outside):
-    d = tmp_path / "r"
-    rd = RunDir.create(d)
-    os.symlink(outside, d / "log.csv")
+    rd, d = planted(tmp_path, outside, "log.csv")
     with pytest.raises(OSError, match="symbolic link"):
         rd.log_row({"generation": 0})
     with pytest.raises(FormatError, match="symbolic link"):
@@ -102,9 +108,7 @@ def test_planted_log_symlink_is_neither_appended_nor_trimmed(tmp_path, outside):
 
 
 def test_json_records_replace_a_symlink_never_its_target(tmp_path, outside):
-    d = tmp_path / "r"
-    rd = RunDir.create(d)
-    os.symlink(outside, d / "checkpoint.json")
+    rd, d = planted(tmp_path, outside, "checkpoint.json")
     with pytest.raises(FormatError, match="symbolic link"):
         rd.load_checkpoint()
     rd.save_checkpoint({"generation": 1})
@@ -118,9 +122,7 @@ def test_run_refuses_a_planted_config_symlink(tmp_path, outside, capsys):
     assert main(["run", "lamp_hop", "--out", str(out), *GP]) == 0
     os.replace(out / "config.json", tmp_path / "config.json")
     os.symlink(tmp_path / "config.json", out / "config.json")
-    capsys.readouterr()
-    assert main(["resume", str(out), "--quiet"]) == 2
-    one_line_error(capsys, "symbolic link")
+    refused(capsys, ["resume", str(out), "--quiet"], "symbolic link")
 
 
 # ------------------------------------------------------------------ disk full
