@@ -5,7 +5,7 @@ import pytest
 import gpmotion
 from gpmotion.controllers import schedule
 from gpmotion.figures import planar_spec_to_3d
-from tests import batch_checks as B
+from tests import physics_checks as B
 from tests import figures_for_tests as F
 from tests.reference import planar_ref as ref
 
@@ -61,19 +61,13 @@ def _momentum_drift(dt):
     tr = gpmotion.rollout(fig, scene, ctrl, n_steps=int(3 / dt), qd0=qd0, dt=dt,
                           record_every=int(0.1 / dt))
     assert np.abs(tr.q[0, -1, 3:] - tr.q[0, 0, 3:]).max() > 0.1   # it really moved its joints
-    mom = [ref.momentum(fig.model, q, qd) for q, qd in zip(tr.q[0], tr.qd[0])]
-    P = np.array([p for p, _ in mom])
-    L = np.array([l for _, l in mom])
-    return np.abs(P - P[0]).max() / np.abs(P[0]).max(), np.abs(L - L[0]).max() / abs(L[0])
+    return B.momentum_drift(ref.momentum, fig.model, tr, size=lambda v: np.abs(v).max())
 
 
 def test_free_figure_conserves_momentum_without_gravity():
     # internal PD torques only: momentum is conserved by the equations; the
     # integrator in joint coordinates conserves it to first order in dt
-    p1, l1 = _momentum_drift(1e-3)
-    p2, l2 = _momentum_drift(5e-4)
-    assert p1 < 0.06 and l1 < 0.06
-    assert 0.4 < p2 / p1 < 0.6 and 0.4 < l2 / l1 < 0.6
+    B.assert_momentum_drift_is_first_order(_momentum_drift, 0.06)
 
 
 def test_tumbling_rigid_body_keeps_momentum_exactly():
