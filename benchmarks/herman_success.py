@@ -34,6 +34,14 @@ import numpy as np
 from gpmotion.records import read_json
 from gpmotion.run import RunConfig, run
 
+# Checkpoint interval of the benchmark's runs (s of wall time).  A checkpoint
+# (the population as JSON) costs ~0.5 s of main-thread CPU; `gpmotion run`
+# writes one every 10 s, ~9 in a 90 s run on a quiet machine.  Under load a
+# generation takes 3-5x longer, so at 10 s the run would checkpoint every
+# generation and main_cpu_s would count ~40 checkpoints a quiet run never
+# writes; 30 s keeps their number near the quiet run's.
+CHECKPOINT_S = 30.0
+
 # name -> (task, params): every Herman task and preset of issue 18's bar
 CONFIGS = {
     "touch_nose": ("herman_touch_nose", {}),
@@ -61,7 +69,8 @@ def run_one(name: str, seed: int, tmp: str | None = None) -> dict:
     with tempfile.TemporaryDirectory(dir=tmp) as d:
         out = Path(d) / "run"
         t0, c0, m0 = time.perf_counter(), _cpu(), time.thread_time()
-        run(RunConfig(task=task, seed=seed, params=params), out, quiet=True, artifacts=False)
+        run(RunConfig(task=task, seed=seed, params=params), out, quiet=True, artifacts=False,
+            checkpoint_every=CHECKPOINT_S)
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
     return {"config": name, "seed": seed, "success": bool(best["success"]),
