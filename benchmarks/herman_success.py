@@ -60,6 +60,7 @@ CONFIGS = {
 EXTRA = {   # not in the bar; --only names them
     "touch/knee_l": ("herman_touch", {"site": "knee_l"}),
     "touch/elbow_l": ("herman_touch", {"site": "elbow_l"}),
+    "grasp": ("herman_grasp", {}),
 }
 
 
