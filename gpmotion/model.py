@@ -146,6 +146,7 @@ class Scene(NamedTuple):
     c_pole: float
     goal: np.ndarray        # float64[2] the goal point (x, z) senses refer to
     goal_y: float = 0.0     # its y: a 3-D figure's goal is (goal[0], goal_y, goal[1])
+    obj: np.ndarray = np.zeros(0)   # a free object, its table and grip (gpmotion.sim.grip3d); empty: none
 
     @property
     def goal3(self) -> np.ndarray:
@@ -155,11 +156,13 @@ class Scene(NamedTuple):
 
 def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
-               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0)) -> Scene:
+               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=()) -> Scene:
     """A Scene with the defaults every shipped figure is stable with at dt=1 ms.
 
     ``goal``: (x, z) for planar figures, or (x, y, z) (a 3-D figure's senses
     refer to it; a planar one sees its (x, z)).
+    ``obj``: a free object with its table and grip, 3-D figures only
+    (``gpmotion.sim.grip3d.object_params``); empty: none.
     """
     goal = np.asarray(goal, dtype=np.float64).reshape(-1)
     if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
@@ -176,7 +179,16 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
         raise ValueError("scene: poles need finite x, z and a radius > 0")
     return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
                  float(c_ground), float(mu), float(k_tangent), float(c_tangent),
-                 poles, float(k_pole), float(c_pole), goal, goal_y)
+                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj))
+
+
+def _object(obj) -> np.ndarray:
+    from .sim.grip3d import N_OBJ
+    obj = np.array(obj, dtype=np.float64).reshape(-1)
+    if obj.size not in (0, N_OBJ) or not np.all(np.isfinite(obj)):
+        raise ValueError(f"scene: obj must be empty or {N_OBJ} finite numbers "
+                         "(gpmotion.sim.grip3d.object_params)")
+    return obj
 
 
 @dataclass

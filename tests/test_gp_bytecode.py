@@ -326,3 +326,26 @@ def test_kernels_run_without_jit(info, trees, tmp_path):
     out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
                          text=True, timeout=120)
     assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+
+
+def test_token_lists_encode_as_their_trees_once_remembered(info, trees, monkeypatch):
+    """encode_trees remembers compiled token lists (most trees of a GP
+    generation are unchanged copies): a remembered list encodes exactly as
+    its tree does, lazy and eager apart, and -0.0 apart from 0.0; a
+    remembered list is not compiled again."""
+    from gpmotion.gp import bytecode
+    monkeypatch.setattr(bytecode, "_COMPILED", {})
+    toks = [tree_to_tokens(t) for t in trees[:40]]
+    calls = []
+    real = bytecode.compile_tree
+    monkeypatch.setattr(bytecode, "compile_tree", lambda *a, **k: calls.append(1) or real(*a, **k))
+    for lazy in (True, False):
+        for tree, tk in zip(trees[:40], toks):
+            want = encode_trees([tree], info, [0], lazy=lazy)
+            for _ in range(2):
+                got = encode_trees([tk], info, [0], lazy=lazy)
+                assert all(np.array_equal(g, w) for g, w in zip(got, want))
+    assert len(calls) == 2 * 40 + 2 * len({repr(t) for t in toks})   # trees always; lists once per mode
+    zero, negzero = ["add", "t", 0.0], ["add", "t", -0.0]
+    cf0, cf1 = encode_trees([zero], info, [0])[1], encode_trees([negzero], info, [0])[1]
+    assert np.copysign(1.0, cf0[-1]) == 1.0 and np.copysign(1.0, cf1[-1]) == -1.0

@@ -19,20 +19,20 @@ def bench():
 def test_benchmark_runs_only_what_its_file_lacks_and_tables_the_file(bench, tmp_path, monkeypatch, capsys):
     out = tmp_path / "runs.jsonl"
     out.write_text(json.dumps({"config": "touch_nose", "seed": 0, "success": True, "wall_s": 80.0,
-                               "cpu_s": 150.0, "load": 1.5, "final_cost": 0.1, "facts": []}) + "\n")
+                               "cpu_s": 150.0, "load": 1.5, "final_cost": 0.1, "facts": []}) + "\n")   # no main_cpu_s: an older row
     calls = []
 
     def fake(name, seed, tmp=None):
         calls.append((name, seed))
         return {"config": name, "seed": seed, "success": seed != 2, "wall_s": 70.0 + seed, "cpu_s": 100.0,
-                "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
+                "main_cpu_s": 50.0 + seed, "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
 
     monkeypatch.setattr(bench, "run_one", fake)
     assert bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)]) == 0
     assert calls == [("point", 0), ("touch_nose", 1), ("point", 1), ("touch_nose", 2), ("point", 2)]
     table = capsys.readouterr().out
-    assert "| touch_nose | 2 / 3 | 80 | 150 | 1.5–2.0 |" in table
-    assert "| point | 2 / 3 | 72 | 100 | 2.0–2.0 |" in table
+    assert "| touch_nose | 2 / 3 | 72 | 80 | 52 | 1.5–2.0 |" in table     # medians of 80, 71, 72; 51, 52
+    assert "| point | 2 / 3 | 71 | 72 | 51 | 2.0–2.0 |" in table
     assert len(out.read_text().splitlines()) == 6
     calls.clear()
     bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)])

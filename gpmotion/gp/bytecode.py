@@ -145,7 +145,7 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
     if len(subgoals) != len(info.flag_names):
         raise ValueError(f"{len(subgoals)} subgoal tests for {len(info.flag_names)} subgoal terminals")
     n = len(trees)
-    compiled = [compile_tree(_as_tree(t, info), info, lazy) for t in trees]
+    compiled = [_compiled(t, info, lazy) for t in trees]
     ci = [n, max((c[2] for c in compiled), default=0), len(subgoals)] + [0] * (3 * n)
     cf: list[float] = []
     for sense, code, threshold in subgoals:
@@ -158,6 +158,27 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
             ci += [op, arg + base if op == OP_PUSH_CONST else arg]
         cf += consts
     return np.asarray(ci, dtype=np.int64), np.asarray(cf, dtype=np.float64)
+
+
+# compile_tree's results by token list: a GP generation re-encodes every
+# individual, but crossover and mutation change one tree of an individual
+# and reproduction none, so most trees were compiled before (herman: ~1 s of
+# Python per generation).  Keyed on the exact tokens (repr keeps -0.0 apart
+# from 0.0) and what maps them to opcodes; cleared when it grows large.
+_COMPILED: dict = {}
+_COMPILED_MAX = 100_000
+
+
+def _compiled(t, info: PsetInfo, lazy: bool):
+    if isinstance(t, gp.PrimitiveTree):
+        return compile_tree(t, info, lazy)
+    key = (info.hash, info.sense_indices, lazy, repr(list(t)))
+    hit = _COMPILED.get(key)
+    if hit is None:
+        if len(_COMPILED) >= _COMPILED_MAX:
+            _COMPILED.clear()
+        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy)
+    return hit
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
@@ -183,10 +204,6 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
 
 
 # ---------------------------------------------------------------- tokens
-
-def _as_tree(t, info: PsetInfo) -> gp.PrimitiveTree:
-    return t if isinstance(t, gp.PrimitiveTree) else tokens_to_tree(t, info)
-
 
 def tree_to_tokens(tree) -> list:
     """Prefix token list: primitive names, terminal names, floats for constants."""

@@ -14,13 +14,15 @@ A backend is a module (:mod:`gpmotion.sim.backend_planar`,
   herman kernel compiled for > 17 min cold where it now takes 6.4 min, at
   load 9 on 2 cores); ``workspace`` and ``save_contact`` are inlined:
 
-  - ``workspace(M, nv, contact) -> Work``: per-episode scratch (a NamedTuple),
-    friction anchors taken from ``contact``;
+  - ``workspace(M, S, nv, contact) -> Work``: per-episode scratch (a NamedTuple),
+    friction anchors taken from ``contact``, the scene's object (if any) at its start;
   - ``observe(M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm)
     -> deepest pole penetration``: kinematics, contact forces, com, senses;
   - ``advance(M, S, q, qd, targets, taus, actuation, dt, limit, work,
     energy) -> (finite?, energy)``: torques, dynamics, one integration step;
   - ``save_contact(work, contact)``: the friction state at the end;
+  - ``store_object(work, row)``: the scene's object into a recorded frame
+    (3-D only: gpmotion.sim.grip3d);
 * recorded frames (numpy): ``goal(scene)``, ``link_poses(model, q)``,
   ``base_pose(model, q, poses)``, ``points(model, q, poses, links, local)``,
   ``world_frames(model, q)`` (3-D rotations and origins; planar lifted),
@@ -52,7 +54,7 @@ def _kernels(M):
 
 
 # ---- generic kernel steps: each resolves to the Model's backend at compile time
-def workspace(M, nv, contact):
+def workspace(M, S, nv, contact):
     raise NotImplementedError("numba only")
 
 
@@ -68,10 +70,14 @@ def save_contact(M, work, contact):
     raise NotImplementedError("numba only")
 
 
+def store_object(M, work, row):
+    raise NotImplementedError("numba only")
+
+
 @overload(workspace, inline="always")
-def _workspace(M, nv, contact):
+def _workspace(M, S, nv, contact):
     f = _kernels(M).workspace
-    return lambda M, nv, contact: f(M, nv, contact)
+    return lambda M, S, nv, contact: f(M, S, nv, contact)
 
 
 @overload(observe, inline="always")
@@ -92,3 +98,9 @@ def _advance(M, S, q, qd, targets, taus, actuation, dt, limit, work, energy):
 def _save_contact(M, work, contact):
     f = _kernels(M).save_contact
     return lambda M, work, contact: f(work, contact)
+
+
+@overload(store_object, inline="always")
+def _store_object(M, work, row):
+    f = _kernels(M).store_object
+    return lambda M, work, row: f(work, row)

@@ -12,6 +12,7 @@ from numba import njit
 
 from ..model import FREE3D, HINGE3D, SLIDE3D
 from . import geometry3d
+from .grip3d import N_OB, OB_REC, object_start, object_step
 from .spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass, compute_senses3d,
                         ground_contacts, integrate, joint_torques, kinematics, pole_contacts)
 
@@ -55,19 +56,22 @@ class Work(NamedTuple):
     arm: np.ndarray        # [nv] implicit-PD armature (joint_torques → aba_packed)
     anchor: np.ndarray     # [nc, 2] friction anchors, carried in and out (composites)
     touching: np.ndarray   # [nc]
+    ob: np.ndarray         # [grip3d.N_OB] the scene's object: centre, velocity, grip
 
 
 @njit(**_INLINE)
-def workspace(M, nv, contact):
+def workspace(M, S, nv, contact):
     nl = M.parent.shape[0]
     Ib = np.zeros((nl, N_IB))
     body_inertias(M, Ib)           # constant: once per episode
-    return Work(np.zeros((nl, 3, 3)), np.zeros((nl, 3)), np.zeros((nl, 3, 3)), np.zeros((nl, 3)),
-                np.zeros((nl, 6)), np.zeros((nl, 6)), Ib, np.zeros((nl, N_IA)), np.zeros((nl, 6)),
-                np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros(nl), np.zeros(nl), np.zeros((nl, 6)),
-                np.zeros((6, 6)), np.zeros(6), np.zeros(6), np.zeros(nv), np.zeros(nv),
-                np.zeros((nl, 6)), np.zeros(nv, dtype=np.int64), np.zeros(nv), np.zeros(nv),
-                contact[:, 0:2].copy(), contact[:, 2].copy())
+    w = Work(np.zeros((nl, 3, 3)), np.zeros((nl, 3)), np.zeros((nl, 3, 3)), np.zeros((nl, 3)),
+             np.zeros((nl, 6)), np.zeros((nl, 6)), Ib, np.zeros((nl, N_IA)), np.zeros((nl, 6)),
+             np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros(nl), np.zeros(nl), np.zeros((nl, 6)),
+             np.zeros((6, 6)), np.zeros(6), np.zeros(6), np.zeros(nv), np.zeros(nv),
+             np.zeros((nl, 6)), np.zeros(nv, dtype=np.int64), np.zeros(nv), np.zeros(nv),
+             contact[:, 0:2].copy(), contact[:, 2].copy(), np.zeros(N_OB))
+    object_start(S.obj, w.ob)
+    return w
 
 
 @njit(**STEP)
@@ -93,6 +97,8 @@ def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
     """One step of dt from the observed state: (finite?, energy + actuator work)."""
     tau = w.tau
     joint_torques(M, q, qd, targets, taus, actuation, dt, tau, w.presc, w.presc_qdd, w.arm)
+    if S.obj.shape[0] > 0:         # the object moves; a grip's reaction joins w.fext
+        object_step(S.obj, S.gravity, S.ground, S.ground_z, w.R, w.pos, w.v, w.fext, w.ob, dt)
     aba_packed(M, qd, w.E, w.r, w.v, w.cbias, tau, w.fext, w.presc, w.presc_qdd, w.arm, S.gravity,
                w.Ib, w.IA, w.pA, w.U, w.Ut, w.dinv, w.uu, w.acc, w.qdd, w.L6, w.b6, w.x6)
     act_dof = M.act_dof
@@ -106,6 +112,12 @@ def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
 def save_contact(w, contact):
     contact[:, 0:2] = w.anchor
     contact[:, 2] = w.touching
+
+
+@njit(**_INLINE)
+def store_object(w, row):
+    for k in range(OB_REC):
+        row[k] = w.ob[k]
 
 
 # ---- recorded frames (numpy) ----------------------------------------------

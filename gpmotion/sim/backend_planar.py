@@ -54,7 +54,7 @@ class Work(NamedTuple):
 
 
 @njit(**_INLINE)
-def workspace(M, nv, contact):
+def workspace(M, S, nv, contact):
     nl = nv
     return Work(np.zeros((nl, 3)), np.zeros((nl, 4)), np.zeros((nl, 3)), np.zeros((nl, 3)),
                 np.zeros((nl, 2)), np.zeros((nl, 6)), np.zeros((nl, 3)), np.zeros(nl),
@@ -100,6 +100,11 @@ def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
 def save_contact(w, contact):
     contact[:, 0] = w.anchor
     contact[:, 1] = w.touching
+
+
+@njit(**_INLINE)
+def store_object(w, row):
+    """No free objects in the plane (rollout refuses a scene with one)."""
 
 
 # ---- recorded frames (numpy) ----------------------------------------------

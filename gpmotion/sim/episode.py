@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import overload
 
-from gpmotion.sim.backend import BACKENDS, advance, observe, save_contact, workspace
+from gpmotion.sim.backend import BACKENDS, advance, observe, save_contact, store_object, workspace
 from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
 
 
@@ -33,13 +33,15 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     out_q, out_qd, out_com, out_cforce = out.q[e], out.qd[e], out.com[e], out.contact_force[e]
     out_pole, out_impact, out_energy = out.pole_hit[e], out.impact[e], out.energy[e]
     out_targets, out_senses, status = out.targets[e], out.senses[e], out.status[e]
+    out_obj = out.obj[e]
+    has_obj = S.obj.shape[0] > 0
     dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
     record_senses = st.record_senses
     nc = M.cp_link.shape[0]
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
     neutral = M.neutral
-    work = workspace(M, qd.shape[0], contact)
+    work = workspace(M, S, qd.shape[0], contact)
     cforce = np.zeros(nc)
     com = np.zeros(out_com.shape[1])
     senses_all = np.zeros(ns + 1)  # + a scratch entry for the body slots a layout leaves out
@@ -82,6 +84,8 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             out_targets[frame, :] = targets
             if record_senses:
                 out_senses[frame, :] = senses
+            if has_obj:
+                store_object(M, work, out_obj[frame])
             max_cf[:] = 0.0
             max_pole = 0.0
             max_impact = 0.0
@@ -108,6 +112,8 @@ def run_episode(M, S, goal, st, e, start, prog, out):
         out_targets[f, :] = out_targets[frame - 1, :]
         if record_senses:
             out_senses[f, :] = out_senses[frame - 1, :]
+        if has_obj:
+            out_obj[f, :] = out_obj[frame - 1, :]
 
 
 def _compiled(name, flags):

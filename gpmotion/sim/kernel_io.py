@@ -49,11 +49,14 @@ class Outputs(NamedTuple):
     targets: np.ndarray        # [E, F, n_act]
     senses: np.ndarray         # [E, F or 1, n_senses]
     status: np.ndarray         # int64[E, 2]: diverged (0/1), step of divergence or −1
+    obj: np.ndarray            # [E, F or 1, grip3d.OB_REC] the scene's object (x, y, z, v, gripped)
 
     @staticmethod
     def zeros(E: int, F: int, nq: int, nv: int, com: int, nc: int, na: int, ns: int,
-              record_senses: bool) -> "Outputs":
+              record_senses: bool, record_obj: bool = False) -> "Outputs":
+        from .grip3d import OB_REC
         return Outputs(np.zeros((E, F, nq)), np.zeros((E, F, nv)), np.zeros((E, F, com)),
                        np.zeros((E, F, nc)), np.zeros((E, F)), np.zeros((E, F)), np.zeros((E, F)),
                        np.zeros((E, F, na)), np.zeros((E, F if record_senses else 1, ns)),
-                       np.zeros((E, 2), dtype=np.int64))
+                       np.zeros((E, 2), dtype=np.int64),
+                       np.zeros((E, F if record_obj else 1, OB_REC)))

@@ -17,6 +17,7 @@ from ..controllers import ControllerBatch
 from ..model import KINEMATIC, PD, Figure, Scene, make_scene
 from .backend import backend_of
 from .kernel_io import Outputs, Program, Settings, Start
+from .grip3d import O_LINK
 from .kernels import kernel_for
 
 DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
@@ -54,6 +55,7 @@ class Trajectory:
     diverged: np.ndarray       # [E] bool
     diverged_step: np.ndarray  # [E] step of divergence or −1
     contact_end: np.ndarray | None = None   # [E, nc, 2|3] friction anchors at the end (contact0 of a continuation)
+    obj: np.ndarray | None = None   # [E, F, 7] the scene's object: x, y, z, vx, vy, vz, gripped (0/1); None: no object
 
     @property
     def n_episodes(self) -> int:
@@ -76,7 +78,8 @@ class Trajectory:
                        impact=self.impact[sl], energy=self.energy[sl], targets=self.targets[sl],
                        senses=None if self.senses is None else self.senses[sl],
                        diverged=self.diverged[sl], diverged_step=self.diverged_step[sl],
-                       contact_end=None if self.contact_end is None else self.contact_end[sl])
+                       contact_end=None if self.contact_end is None else self.contact_end[sl],
+                       obj=None if self.obj is None else self.obj[sl])
 
     @property
     def backend(self):
@@ -181,6 +184,10 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     n_steps = int(steps.max())
     steps = np.array(np.broadcast_to(steps, (E,)))
     backend = backend_of(m)
+    has_obj = len(scene.obj) > 0
+    if has_obj and (figure.dimensions != 3 or not 0 <= scene.obj[O_LINK] < len(m.parent)):
+        raise ValueError(f"scene: a free object needs a 3-D figure and a gripping link of it; "
+                         f"{figure.name!r} has {len(m.parent)} links")
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1
@@ -191,7 +198,7 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     program = Program(np.array(controller.ci, dtype=np.int64),
                       np.array(controller.cf, dtype=np.float64),
                       np.zeros((E, max(1, controller.cstate_size))))
-    out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses)
+    out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses, has_obj)
     kernel = kernel_for(controller.module)
     old_threads = numba.get_num_threads()
     if threads:
@@ -201,12 +208,12 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     finally:
         numba.set_num_threads(old_threads)
     channels = out._asdict()
-    status, senses = channels.pop("status"), channels.pop("senses")
+    status, senses, obj = channels.pop("status"), channels.pop("senses"), channels.pop("obj")
     return Trajectory(figure=figure, scene=scene, dt=dt, record_every=record_every,
                       times=np.arange(F) * dt * record_every,
                       senses=senses if record_senses else None,
                       diverged=status[:, 0].astype(bool), diverged_step=status[:, 1],
-                      contact_end=start.contact, **channels)
+                      contact_end=start.contact, obj=obj if has_obj else None, **channels)
 
 
 def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,
