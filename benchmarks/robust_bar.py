@@ -60,6 +60,8 @@ def main(argv=None):
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--starts", type=int, default=8, help="K perturbed starts per controller")
     ap.add_argument("--aggregate", default="mean", choices=["mean", "worst"])
+    ap.add_argument("--confirm", type=int, default=0, help="M confirmation starts (robust run only)")
+    ap.add_argument("--require", type=float, default=1.0, help="success = this fraction of starts")
     ap.add_argument("--trials", type=int, default=100)
     ap.add_argument("--param", action="append", metavar="KEY=VALUE", help="task parameter")
     ap.add_argument("--search", action="append", metavar="KEY=VALUE", help="search setting (both runs)")
@@ -68,11 +70,15 @@ def main(argv=None):
     a = ap.parse_args(argv)
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
     base = Path(a.out) / f"{a.task}-{a.controller}"
+    tag = "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require)) if v not in (0, 1.0))
     rows = []
     for seed in range(a.first_seed, a.first_seed + a.seeds):
         row = {"seed": seed}
-        for kind, robust in (("nominal", {}), ("robust", {"starts": a.starts, "aggregate": a.aggregate})):
-            out = base / f"{kind}-seed{seed}"
+        method = {"starts": a.starts, "aggregate": a.aggregate,
+                  **({"confirm": a.confirm} if a.confirm else {}),
+                  **({"require": a.require} if a.require != 1.0 else {})}
+        for kind, robust in (("nominal", {}), ("robust", method)):
+            out = base / (f"{kind}-seed{seed}" if kind == "nominal" else f"{kind}{tag}-seed{seed}")
             cfg = RunConfig(task=a.task, family=a.controller, seed=seed, params=dict(params),
                             search=dict(search), robust=robust)
             row[f"{kind}_wall_s"] = round(one_run(cfg, out), 1)
@@ -82,7 +88,8 @@ def main(argv=None):
     if a.json:
         print(json.dumps(rows))
         return 0
-    print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}) vs nominal; "
+    print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}), confirm {a.confirm}, "
+          f"require {a.require} vs nominal; "
           f"success from {a.trials} perturbed starts (trial 0 nominal)")
     print("| seed | evolved nominally: success | nominal start | evolved robust: success | nominal start |")
     print("|---|---|---|---|---|")

@@ -72,6 +72,12 @@ def round_rng(seed: int, round_: int) -> np.random.Generator:
     return np.random.default_rng([int(seed), int(round_), 0x0B5A])
 
 
+def confirm_rng(seed: int, round_: int) -> np.random.Generator:
+    """The generator of one round's confirmation starts (``confirm``): neither a
+    training round's nor the robustness judge's."""
+    return np.random.default_rng([int(seed), int(round_), 0xC0F1])
+
+
 def trial_rng(seed: int) -> np.random.Generator:
     """The generator of ``gpmotion robustness``'s trials: never a training round's."""
     return np.random.default_rng([int(seed), 0x7E57])
@@ -232,7 +238,7 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
 # ---------------------------------------------------------------- a run's robust setting
 
 SIZE_KEYS = tuple(Perturbation.__dataclass_fields__)
-SETTING_KEYS = ("starts", "aggregate", *SIZE_KEYS)
+SETTING_KEYS = ("starts", "aggregate", *SIZE_KEYS, "confirm", "require")
 MAX_STARTS = 1000
 
 
@@ -256,6 +262,12 @@ def normalize(robust: dict | None, task) -> dict:
     for k in SIZE_KEYS:
         v = robust.get(k, default[k])
         out[k] = float(validate_number(f"--perturb {k}", v, lo=0, hi=10.0))
+    # written only when set, so configs from before these options read back unchanged
+    if robust.get("confirm", 0):
+        out["confirm"] = int(validate_number("--robust-confirm", robust["confirm"], lo=0,
+                                             hi=MAX_STARTS, integer=True))
+    if robust.get("require", 1.0) != 1.0:
+        out["require"] = float(validate_number("--robust-require", robust["require"], lo=0.01, hi=1.0))
     return out
 
 
@@ -270,32 +282,70 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     holds a normalized setting plus the run's ``seed``.  The starts depend on
     (seed, generation) only, so chunks on any backend and a resumed run see
     the same ones.  Per controller: cost = the aggregate of its K costs;
-    success = it succeeds from every start; failed = some start diverged;
-    measures = those of the mean (``mean``: the mean over starts) or of the
-    worst start (``worst``), so a cost recomputed from them (the final-weights
-    column) agrees with the aggregate; extras (BSR senses) from its first start.
+    success = it succeeds from at least ``require`` (default: every one) of
+    its starts; failed = some start diverged; measures = those of the mean
+    (``mean``: the mean over starts) or of the worst start (``worst``), so a
+    cost recomputed from them (the final-weights column) agrees with the
+    aggregate; extras (BSR senses) from its first start.
+
+    ``confirm`` = M > 0: a controller that succeeds from ``require`` of its K
+    starts is run from M more (``confirm_rng(seed, generation)``), and its
+    cost, measures and success are over all K + M.  Why: "succeeds from all
+    K = 8 starts" is passed by luck — a controller that succeeds from 70 % of
+    starts does so 6 % of the time, and a population of 300 has many — so
+    ``stop_on_success`` and the best-ever cost picked lucky controllers.
     """
     from ..evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
-    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
-                                 sizes_of(r))
-    traj = robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
+    traj = _batch_rollout(ev, genomes, progress, k, round_rng(r["seed"], generation))
+    costs, measures, ok = task.score(traj, progress)
+    costs = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
+    measures = {m: np.asarray(v).reshape(n, k) for m, v in measures.items()}
+    ok, bad = np.asarray(ok, bool).reshape(n, k), traj.diverged.reshape(n, k)
+    agg, folded = _fold(costs, measures, r["aggregate"])
+    require = r.get("require", 1.0)
+    success = ok.mean(axis=1) >= require - 1e-12
+    failed = bad.any(axis=1)
+    m_more = r.get("confirm", 0)
+    cand = np.flatnonzero(success) if m_more else np.zeros(0, int)
+    if cand.size:                                   # run the candidates from M more starts
+        t2 = _batch_rollout(ev, [genomes[i] for i in cand], progress, m_more,
+                            confirm_rng(r["seed"], generation))
+        c2, m2, ok2 = task.score(t2, progress)
+        c2 = np.where(np.isfinite(c2), c2, WORST).reshape(len(cand), m_more)
+        both = {m: np.concatenate([measures[m][cand], np.asarray(v).reshape(len(cand), m_more)], axis=1)
+                for m, v in m2.items()}
+        a2, f2 = _fold(np.concatenate([costs[cand], c2], axis=1), both, r["aggregate"])
+        agg[cand] = a2
+        for m in folded:
+            folded[m][cand] = f2[m]
+        ok_all = np.concatenate([ok[cand], np.asarray(ok2, bool).reshape(len(cand), m_more)], axis=1)
+        success[cand] = ok_all.mean(axis=1) >= require - 1e-12
+        failed[cand] |= t2.diverged.reshape(len(cand), m_more).any(axis=1)
+    extras = fam.extras(traj)                                   # per episode; a genome's first start
+    extras = None if extras is None else extras[::k]
+    return Evaluation(agg, success, failed, folded, extras)
+
+
+def _batch_rollout(ev, genomes, progress, k, rng):
+    """Genomes × K starts drawn from ``rng`` (one batched rollout, controller-major)."""
+    task, fam = ev.task, ev.family
+    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, rng, sizes_of(ev.robust))
+    return robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=ev.actuation, default_tau=fam.default_tau,
                           record_senses=fam.needs_senses, threads=ev.threads)
-    costs, measures, ok = task.score(traj, progress)
-    agg = aggregate(costs, k, r["aggregate"])
-    if r["aggregate"] == "mean":
-        folded = {m: np.asarray(v, float).reshape(n, k).mean(axis=1) for m, v in measures.items()}
-    else:
-        c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
-        pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
-        folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
-    extras = fam.extras(traj)                                   # per episode; a genome's first start
-    extras = None if extras is None else extras[::k]
-    return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
-                      traj.diverged.reshape(n, k).any(axis=1), folded, extras)
+
+
+def _fold(costs, measures: dict, how: str):
+    """Per controller (rows of costs [N, S]): the aggregate cost and the measures that give it
+    (the mean over starts, or the worst start's)."""
+    n = len(costs)
+    if how == "mean":
+        return costs.mean(axis=1), {m: np.asarray(v, float).mean(axis=1) for m, v in measures.items()}
+    pick = np.argmax(costs, axis=1)                             # first of equal worsts
+    return costs.max(axis=1), {m: np.asarray(v)[np.arange(n), pick] for m, v in measures.items()}
 
 
 # ---------------------------------------------------------------- gpmotion run options
@@ -309,6 +359,12 @@ def add_run_arguments(p) -> None:
                         "generation from the run's seed (default: off, the nominal start)")
     g.add_argument("--robust-aggregate", choices=AGGREGATES,
                    help="fold the K costs into one: mean (default) or worst")
+    g.add_argument("--robust-confirm", type=int, metavar="M",
+                   help="a controller that succeeds from its K starts is run from M more, and "
+                        "scored and judged over all K + M (default 0: off)")
+    g.add_argument("--robust-require", type=float, metavar="F",
+                   help="success = succeeds from at least this fraction of its starts "
+                        "(default 1: every one)")
     g.add_argument("--perturb", metavar="PART=SIGMA,...",
                    help="perturbation sizes (σ) overriding the figure's defaults: "
                         + ", ".join(SIZE_KEYS) + " (rad, m, rad, m/s, rad/s); "
@@ -324,6 +380,9 @@ def run_setting(args) -> dict:
         out["starts"] = args.robust_starts
     if getattr(args, "robust_aggregate", None) is not None:
         out["aggregate"] = args.robust_aggregate
+    for key in ("confirm", "require"):
+        if getattr(args, f"robust_{key}", None) is not None:
+            out[key] = getattr(args, f"robust_{key}")
     text = getattr(args, "perturb", None)
     if text is not None:
         for part in text.split(","):
@@ -334,5 +393,6 @@ def run_setting(args) -> dict:
                                   f"{', '.join(SIZE_KEYS)}, got {part.strip()!r}")
             out[k] = float(validate_number(f"--perturb {k}", v.strip(), lo=0, hi=10.0))
     if out and "starts" not in out:
-        raise ConfigError("--robust-aggregate / --perturb need --robust-starts K")
+        raise ConfigError("--robust-aggregate / --robust-confirm / --robust-require / --perturb "
+                          "need --robust-starts K")
     return out
