@@ -20,7 +20,7 @@ a composite file (per-phase scenes: each phase's goal, the pole only in the
 limbo phase) and a script:
 
     python benchmarks/composite.py --composite examples/composite/lamp_careless.json \
-        --script examples/composite/lamp.motion --seed S
+        --script examples/composite/lamp_composite.motion --seed S
 
 A lamp phase "completes" when the base centre is within 5 cm of the phase's
 goal at its last frame (lamp_hop's "arrived") and, in a phase with a pole,

@@ -14,7 +14,7 @@ EX = Path(__file__).resolve().parents[1] / "examples" / "composite"
 @pytest.fixture(scope="module")
 def lamp():
     comp = C.load(EX / "lamp_careless.json")
-    s = S.parse((EX / "lamp.motion").read_text(encoding="utf-8"))
+    s = S.parse((EX / "lamp_composite.motion").read_text(encoding="utf-8"))
     switches = np.array([comp.switches, C.load(EX / "lamp_repaired.json").switches])
     traj, bounds = C.run(comp, switches)
     return comp, s, traj, bounds
