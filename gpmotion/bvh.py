@@ -52,8 +52,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import FREE3D, SLIDE3D, Model3D
 from .records import atomic_write_text
+from .sim.backend import backend_of
 
 # our z-up (x, y, z) → BVH y-up (x, z, −y)
 TO_BVH = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
@@ -80,7 +80,7 @@ def _skeleton(figure) -> tuple[list[_Body], int]:
     root = link_body.get(int(m.base_link))
     if root is None:
         raise ValueError(f"figure {figure.name!r}: no body on the base link")
-    is3d = isinstance(m, Model3D)
+    backend = backend_of(m)
     bodies = []
     for b, (name, L) in enumerate(zip(figure.body_names, seg_link)):
         bname = re.sub(r"\s+", "_", str(name)) or f"body{b}"
@@ -89,7 +89,7 @@ def _skeleton(figure) -> tuple[list[_Body], int]:
             continue
         slide, p = False, L
         while True:
-            if is3d and int(m.jtype[p]) == SLIDE3D:
+            if backend.slides(m, p):
                 slide = True
             p = int(m.parent[p])
             if p < 0 or p in link_body:
@@ -103,44 +103,18 @@ def _skeleton(figure) -> tuple[list[_Body], int]:
     return bodies, root
 
 
-def _rot_about_minus_y(theta: np.ndarray) -> np.ndarray:
-    """Rotation matrices [..., 3, 3] of the planar CCW angle (about −y)."""
-    c, s = np.cos(theta), np.sin(theta)
-    z, o = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, z, -s], -1), np.stack([z, o, z], -1),
-                     np.stack([s, z, c], -1)], -2)
-
-
 def body_frames(figure, q: np.ndarray):
     """World rotation [..., n_bodies, 3, 3] and origin [..., n_bodies, 3] of every
     body's frame (planar figures lifted to (x, 0, z), rotations about −y)."""
     m = figure.model
-    q = np.asarray(q, dtype=np.float64)
+    R, P = backend_of(m).world_frames(m, np.asarray(q, dtype=np.float64))
     links = np.asarray(m.seg_link, dtype=np.int64)
-    if isinstance(m, Model3D):
-        from .sim.geometry3d import link_frames
-        R, P = link_frames(m, q)
-        lead = R.shape[:-3]
-        R = np.concatenate([R, np.broadcast_to(m.fixed_rot, lead + (1, 3, 3))], axis=-3)
-        P = np.concatenate([P, np.broadcast_to(m.fixed_pos, lead + (1, 3))], axis=-2)
-        return R[..., links, :, :], P[..., links, :]
-    from .sim.geometry import link_poses
-    poses = link_poses(m, q)
-    poses = np.concatenate([poses, np.broadcast_to(m.fixed_pose, poses.shape[:-2] + (1, 3))], axis=-2)
-    pb = poses[..., links, :]
-    P = np.stack([pb[..., 1], np.zeros_like(pb[..., 1]), pb[..., 2]], -1)
-    return _rot_about_minus_y(pb[..., 0]), P
+    return R[..., links, :, :], P[..., links, :]
 
 
 def _reference_q(figure) -> np.ndarray:
     """Every joint coordinate zero; a free root at the origin, unrotated."""
-    m = figure.model
-    q = np.zeros(figure.nq)
-    if isinstance(m, Model3D):
-        for i in range(len(m.parent)):
-            if int(m.jtype[i]) == FREE3D:
-                q[int(m.qadr[i]) + 3] = 1.0
-    return q
+    return backend_of(figure.model).reference_q(figure.model)
 
 
 # ---------------------------------------------------------- Euler angles

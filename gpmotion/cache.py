@@ -7,6 +7,7 @@ finds the file and numba's on-disk cache beside it: no recompilation.
 """
 from __future__ import annotations
 
+import ast
 import hashlib
 import importlib.util
 import os
@@ -70,3 +71,61 @@ def import_file(path: str | Path):
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+def read_source(path: Path) -> bytes:
+    """A module's source as hashed into kernel keys (one place, so tests can patch it)."""
+    return Path(path).read_bytes()
+
+
+def package_modules(source: str, package: str = "", root: str = "gpmotion") -> dict[str, Path]:
+    """The modules of package ``root`` that ``source`` imports, directly or through
+    each other: {module name: file}.  Every import statement counts, also one
+    inside a function; a package's ``__init__`` counts when something is taken
+    from it (``from pkg import name``, name not a submodule), not when it is
+    only passed through (``from pkg import submodule``, ``pkg.sub``).
+
+    ``package``: the package ``source`` belongs to (for its relative imports).
+    Kernel keys hash these files, so a helper moved or edited anywhere along
+    the chain gives a new kernel, never a stale one.
+    """
+    found: dict[str, Path] = {}
+    todo = [(source, package)]
+    while todo:
+        src, pkg = todo.pop()
+        for base, names in _imports(src, pkg):
+            if not (base == root or base.startswith(root + ".")):
+                continue
+            missing = [n for n in names if not _add(f"{base}.{n}", found, todo)]
+            if missing or not names:
+                _add(base, found, todo)
+    return found
+
+
+def _add(name: str, found: dict, todo: list) -> bool:
+    """Record module ``name`` (and queue its source); False when it is no module file."""
+    if name in found:
+        return True
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, AttributeError, ValueError):    # an attribute of a module
+        return False
+    if spec is None or not spec.has_location or not str(spec.origin).endswith(".py"):
+        return False
+    found[name] = Path(spec.origin)
+    is_pkg = spec.submodule_search_locations is not None
+    todo.append((found[name].read_text(), name if is_pkg else name.rpartition(".")[0]))
+    return True
+
+
+def _imports(source: str, package: str):
+    """(module, names taken from it) of every import statement in ``source``."""
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            yield from ((a.name, []) for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1] + ([base] if base else []))
+            yield base, [a.name for a in node.names]

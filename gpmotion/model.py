@@ -23,6 +23,8 @@ PD, KINEMATIC = 0, 1
 
 class Model(NamedTuple):
     """Arrays only: the one thing the numba kernels see (order parents-first)."""
+    BACKEND = "planar"      # the simulator backend (gpmotion.sim.backend); class constants,
+    DIMENSIONS = 2          # not fields (the kernels never see them)
     parent: np.ndarray      # int64[nl]   parent link or -1 (world)
     jtype: np.ndarray       # int64[nl]   REVOLUTE / SLIDE_X / SLIDE_Z
     xtree: np.ndarray       # float64[nl, 3]  (angle, rx, rz) parent→joint frame
@@ -49,6 +51,15 @@ class Model(NamedTuple):
     limit_c: float          # joint-limit damper (N·m·s/rad)
     sense_lo: np.ndarray    # float64[n_senses] ranges of the normalized view
     sense_hi: np.ndarray
+    sense_at: np.ndarray    # int64[n_slots] where the kernel writes each sense slot (gpmotion.sim.senses)
+
+    @property
+    def nq(self) -> int:
+        return len(self.parent)
+
+    @property
+    def nv(self) -> int:
+        return len(self.parent)
 
     def __repr__(self) -> str:
         return _model_repr(self)
@@ -56,7 +67,7 @@ class Model(NamedTuple):
 
 def _model_repr(m) -> str:
     """Sizes, not arrays: a Model's full repr is tens of kB."""
-    dims = "3-D" if hasattr(m, "nq") else "planar"
+    dims = "3-D" if m.DIMENSIONS == 3 else "planar"
     return (f"{type(m).__name__}({dims}: {len(m.parent)} links, {len(m.act_dof)} actuators, "
             f"{len(m.cp_link)} contact points, {len(m.seg_link)} segments, "
             f"{len(m.sense_lo)} senses, mass {float(m.mass.sum()):.3g} kg)")
@@ -75,6 +86,8 @@ class Model3D(NamedTuple):
     q̇ = (ω_body, v_body).  Per-dof arrays (``lo``, ``hi``, ``damping``) have nv
     entries; ``qadr``/``dadr`` give each link's first q / q̇ index.
     """
+    BACKEND = "3d"          # the simulator backend (gpmotion.sim.backend); class constants,
+    DIMENSIONS = 3          # not fields (the kernels never see them)
     parent: np.ndarray      # int64[nl]   parent link or -1 (world)
     jtype: np.ndarray       # int64[nl]   HINGE3D / SLIDE3D / FREE3D
     axis: np.ndarray        # float64[nl, 3]  unit joint axis in the joint frame
@@ -109,6 +122,7 @@ class Model3D(NamedTuple):
     limit_c: float
     sense_lo: np.ndarray
     sense_hi: np.ndarray
+    sense_at: np.ndarray    # int64[n_slots] where the kernel writes each sense slot (gpmotion.sim.senses)
     nq: int
     nv: int
 
@@ -193,20 +207,16 @@ class Figure:
     @property
     def nq(self) -> int:
         """Length of the configuration q (a 3-D free root has nq = nv + 1)."""
-        if isinstance(self.model, Model3D):
-            return int(self.model.nq)
-        return len(self.model.parent)
+        return int(self.model.nq)
 
     @property
     def nv(self) -> int:
         """Length of the velocity q̇ (equals nq for planar figures)."""
-        if isinstance(self.model, Model3D):
-            return int(self.model.nv)
-        return len(self.model.parent)
+        return int(self.model.nv)
 
     @property
     def dimensions(self) -> int:
-        return 3 if isinstance(self.model, Model3D) else 2
+        return self.model.DIMENSIONS
 
     @property
     def n_act(self) -> int:

@@ -378,7 +378,6 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=N
     ``elev``/``azim``, ``bodies`` to draw (a close-up: the axis limits follow
     them) and ``ground`` (False: no grid).
     """
-    from .model import Model
     if not 0 <= e < traj.n_episodes:
         raise ValueError(f"episode {e} out of range (the trajectory has {traj.n_episodes})")
     sc = traj.scene
@@ -390,7 +389,7 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=N
     events = motion_events(traj, e)
     if hasattr(task, "picture_events"):        # a task's own moments, e.g. "touch"
         events = sorted(events + list(task.picture_events(traj, e)))
-    if isinstance(traj.figure.model, Model):
+    if traj.figure.dimensions == 2:
         from . import render
         kw = dict(poles=poles, ground_z=ground_z, title=title, goal_label=goal_label,
                   goal=tuple(sc.goal) if goal_label else None)

@@ -16,22 +16,18 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import networkx as nx
 import numpy as np
 
 from ..model import REVOLUTE, SLIDE_X, SLIDE_Z, Figure, Model
+from ..sim.senses import sense_layout
+from .spec3d import compile_spec3d
+from .specparse import (PLANAR_AXIS, SpecError, _body,  # noqa: F401 (SpecError: re-exported)
+                        _name_and_bodies, _num, _tree_order, _vec, check_ground)
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
-
-
-class SpecError(ValueError):
-    """A figure spec is malformed or impossible; the message names the field."""
-
-
-PLANAR_AXIS = (0.0, -1.0, 0.0)   # CCW in the x–z plane seen with x right, z up
 
 
 def load_spec(path: str | Path) -> dict:
@@ -50,20 +46,6 @@ NAMED_LISTS = ("bodies", "joints", "contacts", "sites")
 # not find in the base is then a typo, not an addition
 _NEW_ENTRY_KEYS = {"bodies": ("mass",), "joints": ("parent", "child"), "contacts": ("body",),
                    "sites": ("body",)}
-GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent")
-
-
-def check_ground(spec: dict) -> None:
-    """A spec's optional ``[ground]``: positive numbers for make_scene's ground keys."""
-    g = spec.get("ground", {})
-    if not isinstance(g, dict):
-        raise SpecError("ground: must be a table of " + ", ".join(GROUND_KEYS))
-    for k in g:
-        if k not in GROUND_KEYS:
-            raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS)}")
-        _num(g, k, "ground", positive=k != "mu", lo=0.0)
-
-
 def merge_spec(base: dict, over: dict) -> dict:
     """``over`` laid on ``base`` (what ``extends = "figure"`` does): tables merge
     key by key; in the named lists (bodies, joints, contacts, sites) an entry
@@ -101,57 +83,6 @@ def _no_such_entry(key: str, name: str, known, base: dict) -> str:
     hint = did_you_mean(name, [k for k in known if isinstance(k, str)])
     return (f"no such {kind} {name!r} in {base.get('name', 'the base figure')}{hint}; a new {kind} "
             f"needs {' and '.join(repr(k) for k in _NEW_ENTRY_KEYS[key])}")
-
-
-def _num(d, key, where, default=None, lo=None, positive=False):
-    v = d.get(key, default)
-    if v is None:
-        raise SpecError(f"{where}: missing '{key}'")
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise SpecError(f"{where}: '{key}' must be a finite number, got {v!r}")
-    if positive and v <= 0:
-        raise SpecError(f"{where}: '{key}' must be > 0, got {v!r}")
-    if lo is not None and v < lo:
-        raise SpecError(f"{where}: '{key}' must be >= {lo}, got {v!r}")
-    return float(v)
-
-
-def _vec(d, key, where, n, default=None):
-    v = d.get(key, default)
-    if v is None:
-        raise SpecError(f"{where}: missing '{key}'")
-    if (not isinstance(v, (list, tuple)) or len(v) != n or
-            not all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                    and math.isfinite(x) for x in v)):
-        raise SpecError(f"{where}: '{key}' must be a list of {n} finite numbers, got {v!r}")
-    return np.array(v, dtype=np.float64)
-
-
-def _body(b, i):
-    where = f"body {b.get('name', i)!r}"
-    if not isinstance(b.get("name"), str) or not b["name"]:
-        raise SpecError(f"body #{i}: needs a 'name'")
-    mass = _num(b, "mass", where, positive=True)
-    seg = b.get("segment")
-    if (not isinstance(seg, list) or len(seg) != 2):
-        raise SpecError(f"{where}: 'segment' must be [[x0, z0], [x1, z1]]")
-    a = _vec({"a": seg[0]}, "a", where + " segment", 2)
-    bb = _vec({"b": seg[1]}, "b", where + " segment", 2)
-    radius = _num(b, "radius", where, default=0.02, positive=True)
-    length = float(np.hypot(*(bb - a)))
-    com = _vec(b, "com", where, 2, default=list((a + bb) / 2))
-    shape = b.get("shape", "rod")
-    if "inertia" in b:
-        inertia = _num(b, "inertia", where, positive=True)
-    elif shape == "rod":
-        inertia = mass * length ** 2 / 12.0
-    elif shape == "box":
-        inertia = mass * (length ** 2 + (2 * radius) ** 2) / 12.0
-    else:
-        raise SpecError(f"{where}: unknown shape {shape!r} (rod, box)")
-    inertia = max(inertia, mass * radius ** 2 / 2.0)  # a capsule is never thinner than its radius
-    return dict(name=b["name"], mass=mass, com=com, inertia=inertia,
-                seg=(a, bb), radius=radius)
 
 
 def _joint(j, bodies, i):
@@ -199,50 +130,8 @@ def _points(items, kind, bodies):
     return out
 
 
-def _tree_order(spec_bodies, joints, root_body):
-    g = nx.DiGraph()
-    g.add_nodes_from(spec_bodies)
-    for j in joints:
-        if g.has_edge(j["parent"], j["child"]) or g.in_degree(j["child"]) > 0:
-            raise SpecError(f"joint {j['name']!r}: body {j['child']!r} already has a parent")
-        g.add_edge(j["parent"], j["child"], joint=j)
-    if root_body not in g:
-        raise SpecError(f"root: unknown body {root_body!r}")
-    if not nx.is_arborescence(g) or g.in_degree(root_body) != 0:
-        loose = set(g) - {root_body} - set(nx.descendants(g, root_body))
-        raise SpecError("joints must form a tree rooted at the root body"
-                        + (f"; not reached from it: {sorted(loose)}" if loose else "; a cycle exists"))
-    return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
-
-
-MAX_NAME = 200
-
-
-def _name_and_bodies(spec: dict, parse_body):
-    """The figure's name, its raw [[bodies]] list and the parsed bodies by name
-    (shared by the planar and the 3-D compilers; ``parse_body(b, i)`` differs)."""
-    name = spec.get("name")
-    if not isinstance(name, str) or not name:
-        raise SpecError("figure: needs a 'name'")
-    if len(name) > MAX_NAME:          # a name is drawn in titles: a huge one stalls rendering
-        raise SpecError(f"figure: 'name' is {len(name):,} characters; at most {MAX_NAME}")
-    raw_bodies = spec.get("bodies")
-    if not isinstance(raw_bodies, list) or not raw_bodies:
-        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
-    bodies = {}
-    for i, b in enumerate(raw_bodies):
-        if not isinstance(b, dict):
-            raise SpecError(f"body #{i}: must be a table")
-        bd = parse_body(b, i)
-        if bd["name"] in bodies:
-            raise SpecError(f"body {bd['name']!r} is defined twice")
-        bodies[bd["name"]] = bd
-    return name, raw_bodies, bodies
-
-
 def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     """Validate a spec dict and compile it into a Figure (arrays parents-first)."""
-    from ..sim.senses import sense_layout
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
     # ---- 3-D figures: `dimensions = 3` specs compile in spec3d ----
@@ -250,7 +139,6 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     if dims not in (2, 3) or isinstance(dims, bool):
         raise SpecError(f"figure: 'dimensions' must be 2 or 3, got {dims!r}")
     if dims == 3:
-        from .spec3d import compile_spec3d
         return compile_spec3d(spec, sense_ranges)
     name, raw_bodies, bodies = _name_and_bodies(spec, _body)
     check_ground(spec)
@@ -312,8 +200,8 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     total_mass = sum(b["mass"] for b in bodies.values() if body_link[b["name"]] >= 0)
     actuator_names = [j["name"] for _, j in act]
     contact_names = [c_[0] for c_ in contacts]
-    sense_names, sense_lo, sense_hi = sense_layout(
-        actuator_names, contact_names, np.array([j["lo"] for _, j in act]),
+    sense_names, sense_lo, sense_hi, sense_at = sense_layout(
+        "planar", actuator_names, contact_names, np.array([j["lo"] for _, j in act]),
         np.array([j["hi"] for _, j in act]), total_mass, sense_ranges or {})
     limits = spec.get("limits", {})
     model = Model(
@@ -337,7 +225,7 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
         base_link=body_link[root_body],
         limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
         limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0),
-        sense_lo=sense_lo, sense_hi=sense_hi,
+        sense_lo=sense_lo, sense_hi=sense_hi, sense_at=sense_at,
     )
     return Figure(
         name=name, model=model, root=rtype, link_names=[L["name"] for L in links],

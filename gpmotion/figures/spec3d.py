@@ -56,7 +56,9 @@ import math
 import numpy as np
 
 from ..model import FREE3D, HINGE3D, SLIDE3D, Figure, Model3D
-from .spec import PLANAR_AXIS, SpecError, _name_and_bodies, check_ground, _num, _tree_order, _vec
+from ..sim.rotations import axis_angle, rot_to_quat  # noqa: F401 (rot_to_quat: re-exported)
+from ..sim.senses import sense_layout
+from .specparse import PLANAR_AXIS, SpecError, _body, _name_and_bodies, _num, _tree_order, _vec, check_ground
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -69,20 +71,6 @@ def euler_xyz(rx, ry, rz) -> np.ndarray:
     Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
     return Rx @ Ry @ Rz
-
-
-def rot_to_quat(R) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix, w >= 0."""
-    R = np.asarray(R, dtype=np.float64)
-    K = np.array([
-        [R[0, 0] - R[1, 1] - R[2, 2], R[1, 0] + R[0, 1], R[2, 0] + R[0, 2], R[2, 1] - R[1, 2]],
-        [R[1, 0] + R[0, 1], R[1, 1] - R[0, 0] - R[2, 2], R[2, 1] + R[1, 2], R[0, 2] - R[2, 0]],
-        [R[2, 0] + R[0, 2], R[2, 1] + R[1, 2], R[2, 2] - R[0, 0] - R[1, 1], R[1, 0] - R[0, 1]],
-        [R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1], R[0, 0] + R[1, 1] + R[2, 2]]]) / 3.0
-    w, V = np.linalg.eigh(K)
-    x, y, z, qw = V[:, np.argmax(w)]
-    qv = np.array([qw, x, y, z])
-    return qv if qv[0] >= 0 else -qv
 
 
 def _rotation(d, where):
@@ -247,7 +235,6 @@ def _check_gimbal(axes, lims, where):
             raise SpecError(f"{where}: axes {m + 1} and {m + 2} are (nearly) parallel; an euler "
                             f"joint needs a new direction at every axis")
     if len(axes) == 3:
-        from ..sim.geometry3d import axis_angle
         angles = np.linspace(*lims[1], 721)
         lined_up = np.abs((axis_angle(axes[1], angles) @ axes[2]) @ axes[0]) > near
         if lined_up.any():
@@ -282,7 +269,6 @@ def _points3d(items, kind, bodies):
 
 def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     """Validate a ``dimensions = 3`` spec and compile it into a Figure (Model3D)."""
-    from ..sim.spatial3d import sense_layout3d
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
     name, raw_bodies, bodies = _name_and_bodies(spec, _body3d)
@@ -379,8 +365,8 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     actuator_names = [d["name"] for _, d in act]
     contact_names = [c[0] for c in contacts]
     sensed = [s for s in sites if s[3]]
-    sense_names, sense_lo, sense_hi = sense_layout3d(
-        actuator_names, contact_names, np.array([d["lo"] for _, d in act]),
+    sense_names, sense_lo, sense_hi, sense_at = sense_layout(
+        "3d", actuator_names, contact_names, np.array([d["lo"] for _, d in act]),
         np.array([d["hi"] for _, d in act]), total_mass, sense_ranges or {},
         sites=[s[0] for s in sensed])
     limits = spec.get("limits", {})
@@ -409,7 +395,7 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         base_link=body_link[root_body],
         limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
         limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0),
-        sense_lo=sense_lo, sense_hi=sense_hi, nq=nq, nv=nv)
+        sense_lo=sense_lo, sense_hi=sense_hi, sense_at=sense_at, nq=nq, nv=nv)
     q_default = np.concatenate([np.asarray(L["q0"], dtype=np.float64) for L in links])
     return Figure(
         name=name, model=model, root=rtype, link_names=[L["name"] for L in links],
@@ -431,7 +417,6 @@ def planar_spec_to_3d(spec: dict, root: str | None = None) -> dict:
     planar moment across the segment, m r²/2 along it).  ``root``: keep the
     spec's root type (default; "planar" stays a planar root) or "free"/"fixed".
     """
-    from .spec import _body
     if spec.get("dimensions", 2) == 3:
         raise SpecError("planar_spec_to_3d: the spec is already 3-D")
 

@@ -40,15 +40,15 @@ import numpy as np
 from deap import gp
 
 from gpmotion.controllers import ControllerBatch
+from gpmotion.gp.interpreter import interpreter_path
+from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # noqa: F401 (re-exported)
+                                 OP_PUSH_FLAG, OP_PUSH_SENSE, STACK_CAP)
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
 from gpmotion.gp.subgoals import MAX_SUBGOALS
 
-STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rejected
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
-HEADER = 3
-OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PUSH_FLAG, OP_PRIM0 = 0, 1, 2, 3, 4
 
 
 def is_erc(node) -> bool:
@@ -169,7 +169,6 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
     as in :func:`compile_tree` (the eager form is for benchmarks).
     """
     if module is None:
-        from gpmotion.gp.interpreter import interpreter_path
         module = str(interpreter_path(info))
     rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])

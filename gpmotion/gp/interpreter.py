@@ -29,8 +29,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from gpmotion.cache import digest, import_file, write_module
-from gpmotion.gp.bytecode import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG,
-                                  OP_PUSH_SENSE, STACK_CAP)
+from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG,
+                                 OP_PUSH_SENSE, STACK_CAP)
 from gpmotion.gp.primitives import CLAMP, Primitive
 from gpmotion.gp.pset import PsetInfo
 

@@ -10,26 +10,8 @@ import numba as nb
 import numpy as np
 
 from ..model import FREE3D, HINGE3D
+from .rotations import axis_angle, quat_to_rot, rot_to_quat  # noqa: F401 (quat_to_rot: re-exported)
 from .spatial3d import fixed_point_world, kinematics, point_world
-
-
-def quat_to_rot(qv: np.ndarray) -> np.ndarray:
-    """Rotation matrices [..., 3, 3] of quaternions (w, x, y, z) [..., 4] (normalized here)."""
-    qv = np.asarray(qv, dtype=np.float64)
-    qv = qv / np.linalg.norm(qv, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(qv, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
-
-
-def axis_angle(axis, angle: np.ndarray) -> np.ndarray:
-    """Rotation matrices [..., 3, 3] about a unit axis by angles [...] (Rodrigues)."""
-    a = np.asarray(axis, dtype=np.float64)
-    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    c, s = np.cos(angle)[..., None, None], np.sin(angle)[..., None, None]
-    return c * np.eye(3) + s * K + (1 - c) * np.outer(a, a)
 
 
 def link_frames(model, q: np.ndarray):
@@ -136,7 +118,6 @@ def segments_world(model, q: np.ndarray) -> np.ndarray:
 
 def base_pose(model, q: np.ndarray) -> np.ndarray:
     """Base (root body) pose [..., 7] = (x, y, z, qw, qx, qy, qz)."""
-    from ..figures.spec3d import rot_to_quat
     q = np.asarray(q, dtype=np.float64)
     b = model.base_link
     if b < 0:
@@ -150,11 +131,3 @@ def base_pose(model, q: np.ndarray) -> np.ndarray:
     quats = np.array([rot_to_quat(r) for r in Rb]).reshape(q.shape[:-1] + (4,))
     return np.concatenate([P[..., b, :], quats], axis=-1)
 
-
-def euler_angles(Rm: np.ndarray) -> np.ndarray:
-    """(roll, pitch, yaw) [..., 3] with R = Rz(yaw)·Ry(−pitch)·Rx(roll) (pitch nose-up,
-    the planar CCW convention; the same as the kernel's senses)."""
-    roll = np.arctan2(Rm[..., 2, 1], Rm[..., 2, 2])
-    pitch = np.arcsin(np.clip(Rm[..., 2, 0], -1, 1))
-    yaw = np.arctan2(Rm[..., 1, 0], Rm[..., 0, 0])
-    return np.stack([roll, pitch, yaw], -1)

@@ -1,56 +1,26 @@
 """Batched rollout: many episodes in parallel (numba prange) → a Trajectory.
 
-The kernel is generated per controller kernel module (so the controller's
-``control`` is inlined into the step loop: no Python call per step) and
-cached on disk under a name that hashes every source it depends on.
+The kernel is the one episode loop (gpmotion.sim.episode) generated per
+controller kernel module (so the controller's ``control`` is inlined into
+the step loop: no Python call per step) and cached on disk
+(gpmotion.sim.kernels); the figure's backend (gpmotion.sim.backend) supplies
+the physics and the geometry of recorded frames.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from .. import cache
 from ..controllers import ControllerBatch
-from ..model import KINEMATIC, PD, Figure, Model3D, Scene, make_scene
-from . import geometry, geometry3d
-from .episode3d_template import TEMPLATE3D
-from .episode_template import TEMPLATE
+from ..model import KINEMATIC, PD, Figure, Scene, make_scene
+from .backend import backend_of
+from .kernel_io import Outputs, Program, Settings, Start
+from .kernels import kernel_for
 
-_HERE = Path(__file__).parent
-_SIM_SOURCES = [_HERE / "planar.py", _HERE / "senses.py", _HERE / "actuation.py",
-                _HERE / "episode_template.py", _HERE.parent / "cache.py"]
 DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
 ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
-# ---- 3-D figures (Model3D) run the kernel generated from episode3d_template ----
-_SIM3D_SOURCES = [_HERE / "spatial3d.py", _HERE / "actuation.py", _HERE / "episode3d_template.py",
-                  _HERE.parent / "cache.py"]
-
-
-_KERNELS: dict = {}
-
-
-def kernel_for(control_module: str, dimensions: int = 2):
-    """The rollout kernel for a controller module (memoized per file version:
-    hashing the sources on every call costs more than a small rollout)."""
-    st = Path(control_module).stat()
-    memo = (control_module, dimensions, st.st_mtime_ns, st.st_size)
-    if memo not in _KERNELS:
-        _KERNELS[memo] = _kernel_for(control_module, dimensions)
-    return _KERNELS[memo]
-
-
-def _kernel_for(control_module: str, dimensions: int):
-    ctrl_src = Path(control_module).read_bytes()
-    sources, template, stem = ((_SIM_SOURCES, TEMPLATE, "rollout") if dimensions == 2 else
-                               (_SIM3D_SOURCES, TEMPLATE3D, "rollout3d"))
-    key = cache.digest(cache.file_digest(*sources), ctrl_src, numba.__version__,
-                       str(Path(control_module).resolve()))
-    path = cache.write_module(f"{stem}_{key}",
-                              template.format(CONTROL_MODULE=str(Path(control_module).resolve())))
-    return cache.import_file(path)
 
 
 @dataclass
@@ -109,8 +79,13 @@ class Trajectory:
                        contact_end=None if self.contact_end is None else self.contact_end[sl])
 
     @property
+    def backend(self):
+        """The simulator backend of the figure (gpmotion.sim.backend)."""
+        return backend_of(self.figure.model)
+
+    @property
     def is3d(self) -> bool:
-        return isinstance(self.figure.model, Model3D)
+        return self.figure.dimensions == 3
 
     def _memo(self, key: str, compute):
         """``compute()`` once per Trajectory (scores ask for poses and sites
@@ -127,38 +102,28 @@ class Trajectory:
 
     def poses(self) -> np.ndarray:
         """Planar: [E, F, nl, 3] (θ, x, z); 3-D: [E, F, nl, 4, 4] world transforms."""
-        if self.is3d:
-            return self._memo("_poses", lambda: geometry3d.link_poses(self.figure.model, self.q))
-        return self._memo("_poses", lambda: geometry.link_poses(self.figure.model, self.q))
+        return self._memo("_poses", lambda: self.backend.link_poses(self.figure.model, self.q))
 
     def base(self) -> np.ndarray:
         """Base (root body) pose [E, F, 3] = (pitch, x, z); 3-D: [E, F, 7] (x, y, z, qw, qx, qy, qz)."""
-        m = self.figure.model
-        if self.is3d:
-            return geometry3d.base_pose(m, self.q)
-        if m.base_link < 0:
-            return np.broadcast_to(m.fixed_pose, self.q.shape[:2] + (3,)).copy()
-        return self.poses()[..., m.base_link, :]
+        return self.backend.base_pose(self.figure.model, self.q, self.poses)
+
+    def _points(self, links, local) -> np.ndarray:
+        return self.backend.points(self.figure.model, self.q, self.poses, links, local)
 
     def sites(self) -> np.ndarray:
         """World positions of the figure's sites [E, F, n_sites, 2 or 3]."""
         f = self.figure
-        if self.is3d:
-            return self._memo("_sites", lambda: geometry3d.points_fast(
-                f.model, self.q, f.site_link, f.site_pos))
-        return self._memo("_sites", lambda: geometry.points_world(
-            f.model, self.poses(), f.site_link, f.site_pos))
+        return self._memo("_sites", lambda: self._points(f.site_link, f.site_pos))
 
     def site(self, name: str) -> np.ndarray:
         return self.sites()[..., self.figure.site_names.index(name), :]
 
     def segments(self) -> np.ndarray:
-        if self.is3d:
-            m = self.figure.model
-            return self._memo("_segments", lambda: np.stack(
-                [geometry3d.points_fast(m, self.q, m.seg_link, m.seg_a),
-                 geometry3d.points_fast(m, self.q, m.seg_link, m.seg_b)], axis=-2))
-        return self._memo("_segments", lambda: geometry.segments_world(self.figure.model, self.q))
+        """Capsule end points [E, F, n_seg, 2 (a/b), 2 or 3]."""
+        m = self.figure.model
+        return self._memo("_segments", lambda: np.stack(
+            [self._points(m.seg_link, m.seg_a), self._points(m.seg_link, m.seg_b)], axis=-2))
 
     def sense(self, name: str) -> np.ndarray:
         if self.senses is None:
@@ -174,7 +139,7 @@ def _batch_state(x, n, nq, default, what):
                          f"{'coordinate' if what == 'q0' else 'dof'}), got {x.shape[-1]}")
     if not np.all(np.isfinite(x)):
         raise ValueError(f"{what} must be finite")
-    return np.ascontiguousarray(np.broadcast_to(x, (n, nq)))
+    return np.array(np.broadcast_to(x, (n, nq)))   # a writable copy: one kernel signature
 
 
 def _contact_state(x, n, nc, k):
@@ -214,42 +179,34 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
         raise ValueError("n_steps (a number, or one per episode) and record_every must be >= 1")
     steps = -(-steps.astype(np.int64) // record_every) * record_every     # whole frames
     n_steps = int(steps.max())
-    steps = np.ascontiguousarray(np.broadcast_to(steps, (E,)))
-    is3d = isinstance(m, Model3D)
+    steps = np.array(np.broadcast_to(steps, (E,)))
+    backend = backend_of(m)
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1
     nc, na, ns = len(m.cp_link), len(m.act_dof), len(m.sense_lo)
-    contact = _contact_state(contact0, E, nc, 3 if is3d else 2)
-    out = dict(q=np.zeros((E, F, nq)), qd=np.zeros((E, F, nv)), com=np.zeros((E, F, 6 if is3d else 4)),
-               contact_force=np.zeros((E, F, nc)), pole_hit=np.zeros((E, F)),
-               impact=np.zeros((E, F)), energy=np.zeros((E, F)), targets=np.zeros((E, F, na)),
-               senses=np.zeros((E, F if record_senses else 1, ns)))
-    status = np.zeros((E, 2), dtype=np.int64)
-    cstate = np.zeros((E, max(1, controller.cstate_size)))
-    kernel = kernel_for(controller.module, 3 if is3d else 2)
-    # a 3-D kernel gets the goal as (x, y, z): the scene's (x, z) goal and its goal_y
-    extra = (scene.goal3,) if is3d else ()
+    start = Start(steps, q0, qd0, _contact_state(contact0, E, nc, backend.CONTACT_WIDTH))
+    settings = Settings(float(dt), int(record_every), ACTUATION[actuation], float(default_tau),
+                        DIVERGE_LIMIT, bool(record_senses))
+    program = Program(np.array(controller.ci, dtype=np.int64),
+                      np.array(controller.cf, dtype=np.float64),
+                      np.zeros((E, max(1, controller.cstate_size))))
+    out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses)
+    kernel = kernel_for(controller.module)
     old_threads = numba.get_num_threads()
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
-        kernel.rollout_batch(m, scene, *extra, float(dt), steps, int(record_every),
-                             ACTUATION[actuation],
-                             float(default_tau), DIVERGE_LIMIT, q0, qd0, contact,
-                             np.ascontiguousarray(controller.ci, dtype=np.int64),
-                             np.ascontiguousarray(controller.cf, dtype=np.float64), cstate,
-                             bool(record_senses), out["q"], out["qd"], out["com"],
-                             out["contact_force"], out["pole_hit"], out["impact"], out["energy"],
-                             out["targets"], out["senses"], status)
+        kernel.rollout_batch(m, scene, backend.goal(scene), settings, start, program, out)
     finally:
         numba.set_num_threads(old_threads)
-    senses = out.pop("senses")
+    channels = out._asdict()
+    status, senses = channels.pop("status"), channels.pop("senses")
     return Trajectory(figure=figure, scene=scene, dt=dt, record_every=record_every,
                       times=np.arange(F) * dt * record_every,
                       senses=senses if record_senses else None,
                       diverged=status[:, 0].astype(bool), diverged_step=status[:, 1],
-                      contact_end=contact, **out)
+                      contact_end=start.contact, **channels)
 
 
 def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,

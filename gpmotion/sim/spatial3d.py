@@ -61,7 +61,7 @@ import numpy as np
 from numba import njit
 
 from .actuation import limit_torque, servo
-from .senses import sense_layout
+from .senses import SLOTS
 
 HINGE, SLIDE, FREE = 0, 1, 2
 
@@ -69,31 +69,11 @@ _JIT = dict(cache=True, error_model="numpy", boundscheck=False)
 _INLINE = dict(_JIT, inline="always")
 
 # ---------------------------------------------------------------- senses
-BODY_SENSES3D = ("px", "py", "pz", "vx", "vy", "vz", "roll", "pitch", "yaw",
-                 "wx", "wy", "wz", "up_x", "up_y", "up_z", "com_z", "com_vz", "t")
-N_BODY3D = len(BODY_SENSES3D)
-DEFAULT_RANGES3D = {"px": (-2.0, 2.0), "py": (-2.0, 2.0), "pz": (-1.0, 1.0),
-                    "vx": (-3.0, 3.0), "vy": (-3.0, 3.0), "vz": (-3.0, 3.0),
-                    "roll": (-np.pi, np.pi), "pitch": (-np.pi / 2, np.pi / 2),
-                    "yaw": (-np.pi, np.pi), "wx": (-10.0, 10.0), "wy": (-10.0, 10.0),
-                    "wz": (-10.0, 10.0), "up_x": (-1.0, 1.0), "up_y": (-1.0, 1.0),
-                    "up_z": (-1.0, 1.0), "com_z": (0.0, 2.0), "com_vz": (-3.0, 3.0),
-                    "t": (0.0, 5.0), "rate": (-10.0, 10.0), "site": (-1.0, 1.0)}
-
-
-def sense_layout3d(actuators, contacts, lo, hi, total_mass, overrides, sites=()):
-    """Names and (lo, hi) ranges of the sense vector of a 3-D figure.
-
-    Layout: the body senses ``BODY_SENSES3D`` (base position relative to
-    the goal, base world velocity, roll/pitch/yaw, world angular velocity,
-    the base's up vector (its z axis in world), com height and vertical
-    velocity, time), then ``angle_<dof>``, ``rate_<dof>`` per actuated dof,
-    ``force_<contact>`` per contact point and, per sensed site (``sense =
-    true`` in the spec), ``site_<name>_dx/_dy/_dz``: its world position minus
-    the scene's 3-D goal (range ``site``, ±1 m).
-    """
-    return sense_layout(actuators, contacts, lo, hi, total_mass, overrides,
-                        body=BODY_SENSES3D, ranges=DEFAULT_RANGES3D, sites=sites)
+# slot constants of the 3-D sense kernel, in SLOTS["3d"] order (gpmotion.sim.senses;
+# tests check the pairing by name)
+(S_PX, S_PY, S_PZ, S_VX, S_VY, S_VZ, S_ROLL, S_PITCH, S_YAW, S_WX, S_WY, S_WZ,
+ S_UP_X, S_UP_Y, S_UP_Z, S_COM_Z, S_COM_VZ, S_T, S_COM_X, S_COM_Y, S_COM_VX, S_COM_VY,
+ S_ANGLE, S_RATE, S_FORCE, S_SITE) = range(len(SLOTS["3d"]))
 
 
 # ---------------------------------------------------------------- kinematics
@@ -922,7 +902,8 @@ def integrate(M, q, qd, qdd, dt, limit):
 
 @njit(**_INLINE)
 def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_norm):
-    """Fill ``senses`` / ``senses_norm`` (layout: :func:`sense_layout3d`).
+    """Fill ``senses`` (n_senses + 1 entries: the last is scratch) / ``senses_norm``
+    at ``M.sense_at`` (layout: gpmotion.sim.senses).
 
     Orientation: ``R_base = Rz(yaw) · Ry(−pitch) · Rx(roll)`` — pitch is
     positive nose-up (a rotation about −y), the planar kernel's convention,
@@ -944,33 +925,35 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_n
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = f00, f01, f02, f10, f11, f12, f20, f21, f22
         x, y, z = fx, fy, fz
         w0, w1, w2, l0, l1, l2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    senses[0] = x - goal[0]
-    senses[1] = y - goal[1]
-    senses[2] = z - goal[2]
-    senses[3] = r00 * l0 + r01 * l1 + r02 * l2
-    senses[4] = r10 * l0 + r11 * l1 + r12 * l2
-    senses[5] = r20 * l0 + r21 * l1 + r22 * l2
-    senses[6] = np.arctan2(r21, r22)
-    senses[7] = np.arcsin(min(1.0, max(-1.0, r20)))
-    senses[8] = np.arctan2(r10, r00)
-    senses[9] = r00 * w0 + r01 * w1 + r02 * w2
-    senses[10] = r10 * w0 + r11 * w1 + r12 * w2
-    senses[11] = r20 * w0 + r21 * w1 + r22 * w2
-    senses[12] = r02
-    senses[13] = r12
-    senses[14] = r22
-    senses[15] = com[2]
-    senses[16] = com[5]
-    senses[17] = t
-    nb = 18
-    na = M.act_dof.shape[0]
-    for a in range(na):
-        senses[nb + a] = q[M.act_q[a]]
-        senses[nb + na + a] = qd[M.act_dof[a]]
-    nc = cforce.shape[0]
-    for k in range(nc):
-        senses[nb + 2 * na + k] = cforce[k]
-    ns0 = nb + 2 * na + nc
+    at = M.sense_at
+    senses[at[S_PX]] = x - goal[0]
+    senses[at[S_PY]] = y - goal[1]
+    senses[at[S_PZ]] = z - goal[2]
+    senses[at[S_VX]] = r00 * l0 + r01 * l1 + r02 * l2
+    senses[at[S_VY]] = r10 * l0 + r11 * l1 + r12 * l2
+    senses[at[S_VZ]] = r20 * l0 + r21 * l1 + r22 * l2
+    senses[at[S_ROLL]] = np.arctan2(r21, r22)
+    senses[at[S_PITCH]] = np.arcsin(min(1.0, max(-1.0, r20)))
+    senses[at[S_YAW]] = np.arctan2(r10, r00)
+    senses[at[S_WX]] = r00 * w0 + r01 * w1 + r02 * w2
+    senses[at[S_WY]] = r10 * w0 + r11 * w1 + r12 * w2
+    senses[at[S_WZ]] = r20 * w0 + r21 * w1 + r22 * w2
+    senses[at[S_UP_X]] = r02
+    senses[at[S_UP_Y]] = r12
+    senses[at[S_UP_Z]] = r22
+    senses[at[S_COM_Z]] = com[2]
+    senses[at[S_COM_VZ]] = com[5]
+    senses[at[S_T]] = t
+    senses[at[S_COM_X]] = com[0]
+    senses[at[S_COM_Y]] = com[1]
+    senses[at[S_COM_VX]] = com[3]
+    senses[at[S_COM_VY]] = com[4]
+    a0, r0, f0, site0 = at[S_ANGLE], at[S_RATE], at[S_FORCE], at[S_SITE]
+    for a in range(M.act_dof.shape[0]):
+        senses[a0 + a] = q[M.act_q[a]]
+        senses[r0 + a] = qd[M.act_dof[a]]
+    for k in range(cforce.shape[0]):
+        senses[f0 + k] = cforce[k]
     g0, g1, g2 = goal[0], goal[1], goal[2]
     for k in range(M.ss_link.shape[0]):     # sensed sites: world position − goal
         i = M.ss_link[k]
@@ -983,10 +966,10 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_n
             px = pos[i, 0] + R[i, 0, 0] * s0 + R[i, 0, 1] * s1 + R[i, 0, 2] * s2
             py = pos[i, 1] + R[i, 1, 0] * s0 + R[i, 1, 1] * s1 + R[i, 1, 2] * s2
             pz = pos[i, 2] + R[i, 2, 0] * s0 + R[i, 2, 1] * s1 + R[i, 2, 2] * s2
-        senses[ns0 + 3 * k] = px - g0
-        senses[ns0 + 3 * k + 1] = py - g1
-        senses[ns0 + 3 * k + 2] = pz - g2
-    for k in range(senses.shape[0]):
+        senses[site0 + 3 * k] = px - g0
+        senses[site0 + 3 * k + 1] = py - g1
+        senses[site0 + 3 * k + 2] = pz - g2
+    for k in range(M.sense_lo.shape[0]):
         lo, hi = M.sense_lo[k], M.sense_hi[k]
         span = hi - lo
         yk = (senses[k] - lo) / span if span > 0 else 0.5

@@ -1,0 +1,58 @@
+"""Simulator speed of two checkouts of gpmotion, measured alternately in one run.
+
+    python benchmarks/rollout_ab.py BASE_DIR NEW_DIR [--rounds 3]
+
+runs ``gpmotion bench --json --no-gp --no-warm-start`` for the three
+workloads of issue 15 — lamp (sines), lamp driven by GP trees
+(``--controller gp``) and herman (3-D, GP arm) — with ``PYTHONPATH`` set to
+each checkout in turn (base, new, base, new, ...), so both see the same
+machine load; a first untimed pass per checkout compiles the kernels.
+Prints one JSON object: per workload the median single-thread
+``steps_per_s`` of each checkout and new/base.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+
+WORKLOADS = {"lamp": [], "lamp_gp": ["--controller", "gp"], "herman": ["--figure", "herman"]}
+
+
+def bench(checkout: str, args: list[str]) -> dict:
+    env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout))
+    out = subprocess.run([sys.executable, "-m", "gpmotion", "bench", "--json", "--no-gp",
+                          "--no-warm-start", *args], env=env, check=True, capture_output=True,
+                         text=True, cwd=os.path.abspath(checkout)).stdout
+    return json.loads(out)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("base")
+    p.add_argument("new")
+    p.add_argument("--rounds", type=int, default=3)
+    a = p.parse_args(argv)
+    sides = {"base": a.base, "new": a.new}
+    for side in sides.values():                        # compile (untimed)
+        for args in WORKLOADS.values():
+            bench(side, args + ["--quick"])
+    runs = {w: {s: [] for s in sides} for w in WORKLOADS}
+    for _ in range(a.rounds):
+        for w, args in WORKLOADS.items():
+            for s, path in sides.items():
+                runs[w][s].append(bench(path, args)["steps_per_s"])
+    result = {}
+    for w, r in runs.items():
+        med = {s: statistics.median(v) for s, v in r.items()}
+        result[w] = {"steps_per_s_base": med["base"], "steps_per_s_new": med["new"],
+                     "new_over_base": med["new"] / med["base"], "runs": r}
+    print(json.dumps(result, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,122 @@
+"""Parsing helpers shared by the planar (gpmotion.figures.spec) and the 3-D
+(gpmotion.figures.spec3d) figure compilers: checked numbers and vectors, the
+body list, the joint tree, the ground table."""
+from __future__ import annotations
+
+import math
+
+import networkx as nx
+import numpy as np
+
+
+class SpecError(ValueError):
+    """A figure spec is malformed or impossible; the message names the field."""
+
+
+PLANAR_AXIS = (0.0, -1.0, 0.0)   # CCW in the x–z plane seen with x right, z up
+
+
+GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent")
+
+
+def check_ground(spec: dict) -> None:
+    """A spec's optional ``[ground]``: positive numbers for make_scene's ground keys."""
+    g = spec.get("ground", {})
+    if not isinstance(g, dict):
+        raise SpecError("ground: must be a table of " + ", ".join(GROUND_KEYS))
+    for k in g:
+        if k not in GROUND_KEYS:
+            raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS)}")
+        _num(g, k, "ground", positive=k != "mu", lo=0.0)
+
+
+def _num(d, key, where, default=None, lo=None, positive=False):
+    v = d.get(key, default)
+    if v is None:
+        raise SpecError(f"{where}: missing '{key}'")
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise SpecError(f"{where}: '{key}' must be a finite number, got {v!r}")
+    if positive and v <= 0:
+        raise SpecError(f"{where}: '{key}' must be > 0, got {v!r}")
+    if lo is not None and v < lo:
+        raise SpecError(f"{where}: '{key}' must be >= {lo}, got {v!r}")
+    return float(v)
+
+
+def _vec(d, key, where, n, default=None):
+    v = d.get(key, default)
+    if v is None:
+        raise SpecError(f"{where}: missing '{key}'")
+    if (not isinstance(v, (list, tuple)) or len(v) != n or
+            not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                    and math.isfinite(x) for x in v)):
+        raise SpecError(f"{where}: '{key}' must be a list of {n} finite numbers, got {v!r}")
+    return np.array(v, dtype=np.float64)
+
+
+def _body(b, i):
+    where = f"body {b.get('name', i)!r}"
+    if not isinstance(b.get("name"), str) or not b["name"]:
+        raise SpecError(f"body #{i}: needs a 'name'")
+    mass = _num(b, "mass", where, positive=True)
+    seg = b.get("segment")
+    if (not isinstance(seg, list) or len(seg) != 2):
+        raise SpecError(f"{where}: 'segment' must be [[x0, z0], [x1, z1]]")
+    a = _vec({"a": seg[0]}, "a", where + " segment", 2)
+    bb = _vec({"b": seg[1]}, "b", where + " segment", 2)
+    radius = _num(b, "radius", where, default=0.02, positive=True)
+    length = float(np.hypot(*(bb - a)))
+    com = _vec(b, "com", where, 2, default=list((a + bb) / 2))
+    shape = b.get("shape", "rod")
+    if "inertia" in b:
+        inertia = _num(b, "inertia", where, positive=True)
+    elif shape == "rod":
+        inertia = mass * length ** 2 / 12.0
+    elif shape == "box":
+        inertia = mass * (length ** 2 + (2 * radius) ** 2) / 12.0
+    else:
+        raise SpecError(f"{where}: unknown shape {shape!r} (rod, box)")
+    inertia = max(inertia, mass * radius ** 2 / 2.0)  # a capsule is never thinner than its radius
+    return dict(name=b["name"], mass=mass, com=com, inertia=inertia,
+                seg=(a, bb), radius=radius)
+
+
+def _tree_order(spec_bodies, joints, root_body):
+    g = nx.DiGraph()
+    g.add_nodes_from(spec_bodies)
+    for j in joints:
+        if g.has_edge(j["parent"], j["child"]) or g.in_degree(j["child"]) > 0:
+            raise SpecError(f"joint {j['name']!r}: body {j['child']!r} already has a parent")
+        g.add_edge(j["parent"], j["child"], joint=j)
+    if root_body not in g:
+        raise SpecError(f"root: unknown body {root_body!r}")
+    if not nx.is_arborescence(g) or g.in_degree(root_body) != 0:
+        loose = set(g) - {root_body} - set(nx.descendants(g, root_body))
+        raise SpecError("joints must form a tree rooted at the root body"
+                        + (f"; not reached from it: {sorted(loose)}" if loose else "; a cycle exists"))
+    return [g.edges[p, c]["joint"] for p, c in nx.dfs_edges(g, root_body)]
+
+
+MAX_NAME = 200
+
+
+def _name_and_bodies(spec: dict, parse_body):
+    """The figure's name, its raw [[bodies]] list and the parsed bodies by name
+    (shared by the planar and the 3-D compilers; ``parse_body(b, i)`` differs)."""
+    name = spec.get("name")
+    if not isinstance(name, str) or not name:
+        raise SpecError("figure: needs a 'name'")
+    if len(name) > MAX_NAME:          # a name is drawn in titles: a huge one stalls rendering
+        raise SpecError(f"figure: 'name' is {len(name):,} characters; at most {MAX_NAME}")
+    raw_bodies = spec.get("bodies")
+    if not isinstance(raw_bodies, list) or not raw_bodies:
+        raise SpecError(f"figure {name!r}: needs at least one [[bodies]] entry")
+    bodies = {}
+    for i, b in enumerate(raw_bodies):
+        if not isinstance(b, dict):
+            raise SpecError(f"body #{i}: must be a table")
+        bd = parse_body(b, i)
+        if bd["name"] in bodies:
+            raise SpecError(f"body {bd['name']!r} is defined twice")
+        bodies[bd["name"]] = bd
+    return name, raw_bodies, bodies

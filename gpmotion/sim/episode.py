@@ -1,0 +1,138 @@
+"""The episode loop of every rollout: one loop for every backend and controller.
+
+Each step: the backend observes the state (kinematics, contact forces, com,
+senses), the controller sets the joint targets, a frame is recorded every
+``every`` steps (event channels hold the max, energy the sum, since the
+previous frame), and the backend advances the state by dt.
+
+A rollout kernel for a controller kernel module is a copy of this file with
+one line replaced, the controller import marked ``# controller`` below
+(:mod:`gpmotion.sim.kernels` writes the copy to the cache folder, so numba
+caches it on disk and inlines the controller's ``control`` into the loop: no
+Python call per step).  Imported as it is, this module runs the ``schedule``
+controller.  The controller contract is in :mod:`gpmotion.controllers`; the
+arguments are the named structures of :mod:`gpmotion.sim.kernel_io`.
+"""
+import types
+
+import numpy as np
+from numba import njit, prange
+from numba.extending import overload
+
+from gpmotion.sim.backend import BACKENDS, advance, observe, save_contact, workspace
+from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
+
+
+def run_episode(M, S, goal, st, e, start, prog, out):
+    """Simulate episode ``e`` of the batch (compiled per backend: :data:`_RUNNERS`)."""
+    n_steps = start.n_steps[e]
+    q = start.q0[e].copy()
+    qd = start.qd0[e].copy()
+    contact = start.contact[e]
+    ci, cf, cstate = prog.ci[e], prog.cf[e], prog.cstate[e]
+    out_q, out_qd, out_com, out_cforce = out.q[e], out.qd[e], out.com[e], out.contact_force[e]
+    out_pole, out_impact, out_energy = out.pole_hit[e], out.impact[e], out.energy[e]
+    out_targets, out_senses, status = out.targets[e], out.senses[e], out.status[e]
+    dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
+    record_senses = st.record_senses
+    nc = M.cp_link.shape[0]
+    na = M.act_dof.shape[0]
+    ns = M.sense_lo.shape[0]
+    neutral = M.neutral
+    work = workspace(M, qd.shape[0], contact)
+    cforce = np.zeros(nc)
+    com = np.zeros(out_com.shape[1])
+    senses_all = np.zeros(ns + 1)  # + a scratch entry for the body slots a layout leaves out
+    senses = senses_all[:ns]
+    senses_norm = np.zeros(ns)
+    targets = np.zeros(na)
+    taus = np.zeros(na)
+    max_cf = np.zeros(nc)
+    max_pole = 0.0
+    max_impact = 0.0
+    energy = 0.0
+    frame = 0
+    countdown = 0                  # steps until the next recorded frame
+    ctrl_init(ci, cf, cstate)
+    status[0] = 0
+    status[1] = -1
+    for step in range(n_steps + 1):
+        t = step * dt
+        pen = observe(M, S, goal, q, qd, work, cforce, com, t, senses_all, senses_norm)
+        total = 0.0
+        for k in range(nc):
+            total += cforce[k]
+            if cforce[k] > max_cf[k]:
+                max_cf[k] = cforce[k]
+        max_impact = max(max_impact, total)
+        max_pole = max(max_pole, pen)
+        for a in range(na):
+            targets[a] = neutral[a]
+            taus[a] = default_tau
+        ctrl_control(ci, cf, senses, senses_norm, t, cstate, targets, taus)
+        if countdown == 0:
+            countdown = every
+            out_q[frame, :] = q
+            out_qd[frame, :] = qd
+            out_com[frame, :] = com
+            out_cforce[frame, :] = max_cf
+            out_pole[frame] = max_pole
+            out_impact[frame] = max_impact
+            out_energy[frame] = energy
+            out_targets[frame, :] = targets
+            if record_senses:
+                out_senses[frame, :] = senses
+            max_cf[:] = 0.0
+            max_pole = 0.0
+            max_impact = 0.0
+            energy = 0.0
+            frame += 1
+        countdown -= 1
+        if step == n_steps:
+            break
+        ok, energy = advance(M, S, q, qd, targets, taus, actuation, dt, limit, work, energy)
+        if not ok:
+            status[0] = 1
+            status[1] = step
+            break
+    save_contact(M, work, contact)
+    # an episode that ended early (diverged, or shorter) holds its last frame
+    for f in range(frame, out_q.shape[0]):
+        out_q[f, :] = out_q[frame - 1, :]
+        out_qd[f, :] = 0.0
+        out_com[f, :] = out_com[frame - 1, :]
+        out_cforce[f, :] = 0.0
+        out_pole[f] = 0.0
+        out_impact[f] = 0.0
+        out_energy[f] = 0.0
+        out_targets[f, :] = out_targets[frame - 1, :]
+        if record_senses:
+            out_senses[f, :] = out_senses[frame - 1, :]
+
+
+def _compiled(name, flags):
+    """``run_episode`` compiled with a backend's flags, as a copy named for the
+    backend (numba names its on-disk cache entries after the function)."""
+    f = types.FunctionType(run_episode.__code__, run_episode.__globals__, f"run_episode_{name}")
+    f.__qualname__ = f.__name__
+    return njit(**flags)(f)
+
+
+_RUNNERS = {name: _compiled(name, b.JIT) for name, b in BACKENDS.items()}
+
+
+def episode(M, S, goal, st, e, start, prog, out):
+    raise NotImplementedError("numba only")
+
+
+@overload(episode)
+def _episode(M, S, goal, st, e, start, prog, out):
+    f = _RUNNERS[M.instance_class.BACKEND]
+    return lambda M, S, goal, st, e, start, prog, out: f(M, S, goal, st, e, start, prog, out)
+
+
+@njit(cache=True, parallel=True)
+def rollout_batch(M, S, goal, st, start, prog, out):
+    """Every episode of the batch, in parallel (numba threads)."""
+    for e in prange(start.q0.shape[0]):
+        episode(M, S, goal, st, e, start, prog, out)
