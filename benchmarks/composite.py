@@ -150,9 +150,9 @@ def main(argv=None):
         if any(sc is not None for sc in comp.phase_scene_settings):    # per-phase scenes: a strip each
             from gpmotion.compose.playback import render
             _, _, tr0, b0 = optimize.score(comp, s, [comp.switches])
-            render(comp, tr0, b0, out / "careless.png")
+            render(comp, tr0, b0[0], out / "careless.png")
             _, _, tr1, b1 = optimize.score(fixed, s, [fixed.switches])
-            render(fixed, tr1, b1, out / "repaired.png")
+            render(fixed, tr1, b1[0], out / "repaired.png")
         else:
             from gpmotion.render3d import render_any
             render_any(traj0, out / "careless.png", None, title="careless concatenation (Fig. 13)")

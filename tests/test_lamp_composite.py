@@ -31,7 +31,7 @@ def test_the_lamp_composite_has_its_scenes_per_phase(lamp):
 
 
 def _by_hand(comp, traj, bounds, e):
-    """lamp.motion, computed directly: per phase arrive × upright (× clear for the limbo)."""
+    """lamp_composite.motion, computed directly: per phase arrive × upright × head (× clear for the limbo)."""
     base = traj.site("base_centre")[e]
     pitch = np.unwrap(traj.base()[e, :, 0])
     credits = {}
@@ -41,7 +41,9 @@ def _by_hand(comp, traj, bounds, e):
         arrive = max(0.0, 1.0 - d / 0.2)
         upright = float(np.abs(pitch[lo:hi + 1]).max() < 1)
         clear = float(traj.pole_hit[e, lo:hi + 1].max() <= 0)
-        credits[part.name] = arrive * upright * (clear if part.name == "limbo" else 1.0)
+        heads = [comp.figure.contact_names.index(c) for c in ("head_tip", "head_rim")]
+        head = float(traj.contact_force[e, lo:hi + 1][:, heads].sum(axis=1).max() <= 0)
+        credits[part.name] = arrive * upright * head * (clear if part.name == "limbo" else 1.0)
     total = np.prod([1 + c for c in credits.values()])
     return credits, total
 
@@ -71,3 +73,16 @@ def test_the_benchmarks_lamp_checks(lamp):
     assert checks["hop_distance"] == pytest.approx(d_hop)
     assert done["hop"] == (d_hop < 0.05)
     assert checks["limbo_pole"] > 0 and not done["limbo"]
+
+
+def test_force_of_reads_a_named_contact_and_checks_the_name(lamp):
+    comp, _, traj, bounds = lamp
+    s = S.parse('phase a = max_t(force_of("head_tip"))\nphase b = 0\nphase c = 0\ntotal = a')
+    S.bind(s, comp.figure)
+    got = S.evaluate(s, traj, bounds, comp.scenes)
+    i = comp.figure.contact_names.index("head_tip")
+    for e in range(2):
+        assert got["a"][e] == pytest.approx(traj.contact_force[e, bounds[e, 0]:bounds[e, 1] + 1, i].max())
+    bad = S.parse('phase a = max_t(force_of("head"))\nphase b = 0\nphase c = 0\ntotal = a')
+    with pytest.raises(S.ScriptError, match="no contact 'head'"):
+        S.bind(bad, comp.figure)
