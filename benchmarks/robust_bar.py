@@ -77,7 +77,7 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--starts", type=int, default=8, help="K perturbed starts per controller")
-    ap.add_argument("--aggregate", default="mean", choices=["mean", "worst"])
+    ap.add_argument("--aggregate", default="mean", help="mean, worst or qNN (q80: the 80th-percentile start)")
     ap.add_argument("--confirm", type=int, default=0, help="M confirmation starts (robust run only)")
     ap.add_argument("--require", type=float, default=1.0, help="success = this fraction of starts")
     ap.add_argument("--extend", type=int, default=0, metavar="N",
@@ -91,6 +91,7 @@ def main(argv=None):
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
     base = Path(a.out) / f"{a.task}-{a.controller}"
     tag = "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require)) if v not in (0, 1.0))
+    tag += "" if a.aggregate == "mean" else f"-{a.aggregate}"
     rows = []
     for seed in range(a.first_seed, a.first_seed + a.seeds):
         row = {"seed": seed}

@@ -79,3 +79,15 @@ def test_stop_on_success_keeps_its_solver_over_a_cheaper_earlier_non_solver():
     s.tell(ev(len(pending), 0.03, [False] * (len(pending) - 1) + [True]))
     assert s.stopped and s.final.cost == pytest.approx(0.01)     # the final scoring saw the cheaper one
     assert s.best == pending[-1] and s.best_cost == pytest.approx(0.03)
+
+
+def test_a_percentile_aggregate_picks_that_start_and_its_measures():
+    c = np.array([[5.0, 1.0, 3.0, 2.0, 4.0, 9.0, 7.0, 8.0]])      # sorted: 1 2 3 4 5 7 8 9
+    assert R.aggregate(c.ravel(), 8, "q80")[0] == 8.0                # ceil(0.8·8) = 7th lowest
+    assert R.aggregate(c.ravel(), 8, "q50")[0] == 4.0
+    assert R.aggregate(c.ravel(), 8, "q99")[0] == 9.0 == R.aggregate(c.ravel(), 8, "worst")[0]
+    agg, m = R._fold(c, {"d": c * 10}, "q80")
+    assert agg[0] == 8.0 and m["d"][0] == 80.0                       # the measures of that same start
+    for bad in ("q0", "q100", "median", "q8"):
+        assert not R.is_aggregate(bad)
+    assert R.normalize({"starts": 8, "aggregate": "q80"}, get_task("lamp_hop"))["aggregate"] == "q80"

@@ -30,7 +30,19 @@ from ..model import FREE3D, HINGE3D, REVOLUTE, SLIDE_X, SLIDE_Z, Model3D
 from ..sim.rollout import rollout
 from ..task import WORST
 
-AGGREGATES = ("mean", "worst")
+AGGREGATES = ("mean", "worst")       # and "qNN": the NN-th percentile start (q80, q90, ...)
+
+
+def is_aggregate(how) -> bool:
+    return how in AGGREGATES or (isinstance(how, str) and len(how) == 3 and how[0] == "q"
+                                 and how[1:].isdigit() and 1 <= int(how[1:]) <= 99)
+
+
+def _order_index(n_starts: int, how: str) -> int:
+    """The start an aggregate "qNN" picks among n sorted costs: the NN-th percentile (inverted CDF,
+    so q80 of 8 costs is the 7th lowest — the cost that 80 % of starts do at least as well as)."""
+    q = int(how[1:]) / 100.0
+    return min(n_starts - 1, max(0, int(np.ceil(q * n_starts - 1e-9)) - 1))
 
 
 @dataclass(frozen=True)
@@ -184,11 +196,13 @@ def robust_rollout(figure, scene, batch: ControllerBatch, q0s, qd0s, **rollout_k
 
 def aggregate(costs, k: int, how: str = "mean") -> np.ndarray:
     """Fold costs [N·K] (lower is better) into one per controller [N]; a non-finite cost counts as WORST."""
-    if how not in AGGREGATES:
-        raise ValueError(f"aggregate must be one of {', '.join(AGGREGATES)}, got {how!r}")
+    if not is_aggregate(how):
+        raise ValueError(f"aggregate must be one of {', '.join(AGGREGATES)} or qNN, got {how!r}")
     c = np.asarray(costs, dtype=np.float64).reshape(-1, k)
     c = np.where(np.isfinite(c), c, WORST)
-    return c.mean(axis=1) if how == "mean" else c.max(axis=1)
+    if how in AGGREGATES:
+        return c.mean(axis=1) if how == "mean" else c.max(axis=1)
+    return np.sort(c, axis=1)[:, _order_index(k, how)]
 
 
 def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str = "mean",
@@ -255,8 +269,9 @@ def normalize(robust: dict | None, task) -> dict:
     out = {"starts": int(validate_number("--robust-starts", robust.get("starts", 1), lo=1,
                                          hi=MAX_STARTS, integer=True)),
            "aggregate": robust.get("aggregate", "mean")}
-    if out["aggregate"] not in AGGREGATES:
-        raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)}, "
+    if not is_aggregate(out["aggregate"]):
+        raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)} or qNN (q80: the "
+                          f"80th-percentile start), "
                          f"got {out['aggregate']!r}")
     default = asdict(sizes_for(type(task).figure))
     for k in SIZE_KEYS:
@@ -284,7 +299,8 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     the same ones.  Per controller: cost = the aggregate of its K costs;
     success = it succeeds from at least ``require`` (default: every one) of
     its starts; failed = some start diverged; measures = those of the mean
-    (``mean``: the mean over starts) or of the worst start (``worst``), so a
+    (``mean``: the mean over starts), of the worst start (``worst``) or of the
+    NN-th percentile start (``qNN``: the cost 80 % of starts match, for q80), so a
     cost recomputed from them (the final-weights column) agrees with the
     aggregate; extras (BSR senses) from its first start.
 
@@ -344,8 +360,11 @@ def _fold(costs, measures: dict, how: str):
     n = len(costs)
     if how == "mean":
         return costs.mean(axis=1), {m: np.asarray(v, float).mean(axis=1) for m, v in measures.items()}
-    pick = np.argmax(costs, axis=1)                             # first of equal worsts
-    return costs.max(axis=1), {m: np.asarray(v)[np.arange(n), pick] for m, v in measures.items()}
+    if how == "worst":
+        pick = np.argmax(costs, axis=1)                         # first of equal worsts
+    else:                                                       # qNN: that percentile's start
+        pick = np.argsort(costs, axis=1, kind="stable")[:, _order_index(costs.shape[1], how)]
+    return costs[np.arange(n), pick], {m: np.asarray(v)[np.arange(n), pick] for m, v in measures.items()}
 
 
 # ---------------------------------------------------------------- gpmotion run options
@@ -357,8 +376,9 @@ def add_run_arguments(p) -> None:
                    help="score every controller from K randomly perturbed starts (joint angles, "
                         "position, orientation, linear and angular momentum), redrawn every "
                         "generation from the run's seed (default: off, the nominal start)")
-    g.add_argument("--robust-aggregate", choices=AGGREGATES,
-                   help="fold the K costs into one: mean (default) or worst")
+    g.add_argument("--robust-aggregate", metavar="mean|worst|qNN",
+                   help="fold the K costs into one: mean (default), worst, or qNN, the NN-th "
+                        "percentile start's (q80: what 80 %% of the starts do at least as well as)")
     g.add_argument("--robust-confirm", type=int, metavar="M",
                    help="a controller that succeeds from its K starts is run from M more, and "
                         "scored and judged over all K + M (default 0: off)")
