@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..controllers import ControllerBatch
-from ..model import FREE3D, HINGE3D, REVOLUTE, SLIDE_X, SLIDE_Z, Model3D
+from ..sim.backend import backend_of
 from ..sim.rollout import rollout
 from ..task import WORST
 
@@ -103,49 +103,9 @@ def perturbed_starts(figure, q0, qd0, k: int, rng: np.random.Generator,
     q = np.tile(np.asarray(q0, dtype=np.float64), (k, 1))
     qd = np.tile(np.asarray(qd0, dtype=np.float64), (k, 1))
     m = figure.model
-    perturb = _perturb3d if isinstance(m, Model3D) else _perturb2d
-    perturb(m, q, qd, rng, sizes)
+    backend_of(m).perturb(m, q, qd, rng, sizes)
     _lift(figure, q, np.asarray(q0, dtype=np.float64))
     return q, qd
-
-
-def _perturb2d(m, q, qd, rng, s: Perturbation) -> None:
-    k, n = q.shape
-    z = rng.standard_normal((2, k, n))                         # drawn whole: same stream for any sizes
-    slide = (m.jtype == SLIDE_X) | (m.jtype == SLIDE_Z)
-    root_pitch = (m.jtype == REVOLUTE) & np.isin(m.parent, np.flatnonzero(slide))
-    joint = (m.jtype == REVOLUTE) & ~root_pitch
-    q += z[0] * np.where(slide, s.position, np.where(root_pitch, s.orientation, s.joint))
-    qd += z[1] * np.where(slide, s.velocity, s.angular)
-    q[:, joint] = np.clip(q[:, joint], m.lo[joint], m.hi[joint])
-
-
-def _perturb3d(m, q, qd, rng, s: Perturbation) -> None:
-    k = q.shape[0]
-    zq, zv = rng.standard_normal((k, m.nq)), rng.standard_normal((k, m.nv))
-    for link in range(len(m.parent)):
-        a, d = m.qadr[link], m.dadr[link]
-        if m.jtype[link] == FREE3D:
-            q[:, a:a + 3] += s.position * zq[:, a:a + 3]
-            q[:, a + 3:a + 7] = _rotate(q[:, a + 3:a + 7], s.orientation * zq[:, a + 3:a + 6])
-            qd[:, d:d + 3] += s.angular * zv[:, d:d + 3]       # q̇ = (ω_body, v_body)
-            qd[:, d + 3:d + 6] += s.velocity * zv[:, d + 3:d + 6]
-        else:
-            size = s.joint if m.jtype[link] == HINGE3D else s.position
-            q[:, a] = np.clip(q[:, a] + size * zq[:, a], m.lo[d], m.hi[d])
-            qd[:, d] += (s.angular if m.jtype[link] == HINGE3D else s.velocity) * zv[:, d]
-
-
-def _rotate(quat, rotvec):
-    """quat ⊗ exp(rotvec / 2): a body-frame rotation by |rotvec| rad, renormalized."""
-    angle = np.linalg.norm(rotvec, axis=1, keepdims=True)
-    axis = np.where(angle > 0, rotvec / np.where(angle > 0, angle, 1.0), 0.0)
-    w2, v2 = np.cos(angle / 2), axis * np.sin(angle / 2)
-    w1, v1 = quat[:, :1], quat[:, 1:]
-    w = w1 * w2 - np.sum(v1 * v2, axis=1, keepdims=True)
-    v = w1 * v2 + w2 * v1 + np.cross(v1, v2)
-    out = np.concatenate([w, v], axis=1)
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 def lowest_contact(figure, q) -> np.ndarray:
@@ -153,26 +113,16 @@ def lowest_contact(figure, q) -> np.ndarray:
     m = figure.model
     if len(m.cp_link) == 0:
         return np.full(len(q), np.inf)
-    if isinstance(m, Model3D):
-        from ..sim import geometry3d
-        return geometry3d.points_fast(m, q, m.cp_link, m.cp_pos)[..., 2].min(axis=-1)
-    from ..sim import geometry
-    return geometry.points_world(m, geometry.link_poses(m, q), m.cp_link, m.cp_pos)[..., 1].min(axis=-1)
+    b = backend_of(m)
+    pts = b.points(m, q, lambda: b.link_poses(m, q), m.cp_link, m.cp_pos)
+    return pts[..., b.UP].min(axis=-1)
 
 
 def _lift(figure, q, q_nominal) -> None:
     """Raise starts whose lowest contact point is below the nominal start's (if the root can rise)."""
-    m = figure.model
-    if isinstance(m, Model3D):
-        free = np.flatnonzero(m.jtype == FREE3D)
-        if free.size == 0 or free[0] != 0:
-            return
-        zi = m.qadr[0] + 2
-    else:
-        zs = np.flatnonzero(m.jtype == SLIDE_Z)
-        if zs.size == 0:
-            return
-        zi = zs[0]
+    zi = backend_of(figure.model).height_coordinate(figure.model)
+    if zi is None:
+        return
     floor = lowest_contact(figure, q_nominal[None])[0]
     q[:, zi] += np.maximum(0.0, floor - lowest_contact(figure, q))
 

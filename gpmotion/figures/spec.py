@@ -22,7 +22,8 @@ from ..model import REVOLUTE, SLIDE_X, SLIDE_Z, Figure, Model
 from ..sim.senses import sense_layout
 from .spec3d import compile_spec3d
 from .specparse import (PLANAR_AXIS, SpecError, _body,  # noqa: F401 (SpecError: re-exported)
-                        _name_and_bodies, _num, _tree_order, _vec, check_ground)
+                        _name_and_bodies, _num, _tree_order, _vec, check_ground, figure_of, joint_where,
+                        limit_gains, parse_points, servo_arrays)
 
 try:
     import tomllib
@@ -86,13 +87,7 @@ def _no_such_entry(key: str, name: str, known, base: dict) -> str:
 
 
 def _joint(j, bodies, i):
-    where = f"joint {j.get('name', i)!r}"
-    for k in ("name", "parent", "child"):
-        if not isinstance(j.get(k), str):
-            raise SpecError(f"{where}: needs '{k}' (a name)")
-    for k in ("parent", "child"):
-        if j[k] not in bodies:
-            raise SpecError(f"{where}: unknown {k} body {j[k]!r}")
+    where = joint_where(j, bodies, i)
     if j.get("type", "hinge") != "hinge":
         raise SpecError(f"{where}: unknown joint type {j.get('type')!r} (the planar kernel has 'hinge')")
     axis = tuple(_vec(j, "axis", where, 3, default=list(PLANAR_AXIS)))
@@ -118,16 +113,7 @@ def _joint(j, bodies, i):
 
 
 def _points(items, kind, bodies):
-    out = []
-    for i, p in enumerate(items):
-        where = f"{kind} {p.get('name', i)!r}"
-        if not isinstance(p.get("name"), str) or p.get("body") not in bodies:
-            raise SpecError(f"{where}: needs a 'name' and a known 'body'")
-        out.append((p["name"], p["body"], _vec(p, "position", where, 2)))
-    names = [p[0] for p in out]
-    if len(set(names)) != len(names):
-        raise SpecError(f"{kind} names must be unique: {names}")
-    return out
+    return [(n, b, x) for n, b, x, _ in parse_points(items, kind, bodies, 2, sensed_sites=False)]
 
 
 def compile_spec(spec: dict, sense_ranges=None) -> Figure:
@@ -203,7 +189,6 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     sense_names, sense_lo, sense_hi, sense_at = sense_layout(
         "planar", actuator_names, contact_names, np.array([j["lo"] for _, j in act]),
         np.array([j["hi"] for _, j in act]), total_mass, sense_ranges or {})
-    limits = spec.get("limits", {})
     model = Model(
         parent=np.array([L["parent"] for L in links], dtype=np.int64),
         jtype=np.array([L["jtype"] for L in links], dtype=np.int64),
@@ -211,10 +196,7 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
         mass=body_arr("mass", ()), com=body_arr("com", (2,)), icom=body_arr("inertia", ()),
         lo=lo, hi=hi, damping=damping,
         act_dof=np.array([i for i, _ in act], dtype=np.int64),
-        kp=np.array([j["kp"] for _, j in act], dtype=np.float64),
-        kd=np.array([j["kd"] for _, j in act], dtype=np.float64),
-        tau_max=np.array([j["tau_max"] for _, j in act], dtype=np.float64),
-        neutral=np.array([j["neutral"] for _, j in act], dtype=np.float64),
+        **servo_arrays(act),
         cp_link=np.array([body_link[c_[1]] for c_ in contacts], dtype=np.int64),
         cp_pos=np.array([c_[2] for c_ in contacts], dtype=np.float64).reshape(-1, 2),
         seg_link=np.array([body_link[b] for b in seg_bodies], dtype=np.int64),
@@ -223,16 +205,11 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
         seg_r=np.array([bodies[b]["radius"] for b in seg_bodies]),
         fixed_pose=np.array([ang, pos[0], pos[1]]),
         base_link=body_link[root_body],
-        limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
-        limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0),
+        **limit_gains(spec),
         sense_lo=sense_lo, sense_hi=sense_hi, sense_at=sense_at,
     )
-    return Figure(
-        name=name, model=model, root=rtype, link_names=[L["name"] for L in links],
-        actuator_names=actuator_names, contact_names=contact_names,
-        site_names=[s_[0] for s_ in sites],
-        site_link=np.array([body_link[s_[1]] for s_ in sites], dtype=np.int64),
-        site_pos=np.array([s_[2] for s_ in sites], dtype=np.float64).reshape(-1, 2),
-        sense_names=sense_names, body_names=seg_bodies,
-        q_default=np.array([L["q0"] for L in links], dtype=np.float64),
-        total_mass=total_mass, description=str(spec.get("description", "")), spec=spec)
+    return figure_of(spec, model, 2, links=links, sites=sites, body_link=body_link,
+                     name=name, root=rtype, actuator_names=actuator_names,
+                     contact_names=contact_names, sense_names=sense_names, body_names=seg_bodies,
+                     q_default=np.array([L["q0"] for L in links], dtype=np.float64),
+                     total_mass=total_mass)

@@ -58,7 +58,9 @@ import numpy as np
 from ..model import FREE3D, HINGE3D, SLIDE3D, Figure, Model3D
 from ..sim.rotations import axis_angle, rot_to_quat  # noqa: F401 (rot_to_quat: re-exported)
 from ..sim.senses import sense_layout
-from .specparse import PLANAR_AXIS, SpecError, _body, _name_and_bodies, _num, _tree_order, _vec, check_ground
+from .specparse import (PLANAR_AXIS, SpecError, _body, _name_and_bodies, _num, _tree_order, _vec, body_segment,
+                        check_ground, figure_of, joint_where, limit_gains, parse_points,
+                        servo_arrays)
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -89,17 +91,7 @@ def _unit(v, where, key):
 
 
 def _body3d(b, i):
-    where = f"body {b.get('name', i)!r}"
-    if not isinstance(b.get("name"), str) or not b["name"]:
-        raise SpecError(f"body #{i}: needs a 'name'")
-    mass = _num(b, "mass", where, positive=True)
-    seg = b.get("segment")
-    if not isinstance(seg, list) or len(seg) != 2:
-        raise SpecError(f"{where}: 'segment' must be [[x0, y0, z0], [x1, y1, z1]]")
-    a = _vec({"a": seg[0]}, "a", where + " segment", 3)
-    bb = _vec({"b": seg[1]}, "b", where + " segment", 3)
-    radius = _num(b, "radius", where, default=0.02, positive=True)
-    com = _vec(b, "com", where, 3, default=list((a + bb) / 2))
+    where, mass, a, bb, radius, com = body_segment(b, i, 3)
     if "inertia" in b:
         I = b["inertia"]
         if isinstance(I, list) and len(I) == 3 and all(isinstance(r, list) for r in I):
@@ -141,13 +133,7 @@ def _per_axis(j, key, where, k, default, lo=None):
 
 
 def _joint3d(j, bodies, i):
-    where = f"joint {j.get('name', i)!r}"
-    for k in ("name", "parent", "child"):
-        if not isinstance(j.get(k), str):
-            raise SpecError(f"{where}: needs '{k}' (a name)")
-    for k in ("parent", "child"):
-        if j[k] not in bodies:
-            raise SpecError(f"{where}: unknown {k} body {j[k]!r}")
+    where = joint_where(j, bodies, i)
     jt = j.get("type", "hinge")
     if jt == "fixed":   # welded: the child rides on the parent's link (no dof)
         return dict(name=j["name"], parent=j["parent"], child=j["child"], dofs=[],
@@ -245,28 +231,6 @@ def _check_gimbal(axes, lims, where):
                 f"away (e.g. within ±{90 - GIMBAL_MARGIN_DEG:.0f}° for \"zyx\")")
 
 
-def _points3d(items, kind, bodies):
-    out = []
-    if not isinstance(items, list):
-        raise SpecError(f"{kind}s must be a list of tables")
-    for i, p in enumerate(items):
-        if not isinstance(p, dict):
-            raise SpecError(f"{kind} #{i}: must be a table")
-        where = f"{kind} {p.get('name', i)!r}"
-        if not isinstance(p.get("name"), str) or p.get("body") not in bodies:
-            raise SpecError(f"{where}: needs a 'name' and a known 'body'")
-        sense = p.get("sense", False)
-        if kind != "site" and "sense" in p:
-            raise SpecError(f"{where}: only sites take 'sense'")
-        if not isinstance(sense, bool):
-            raise SpecError(f"{where}: 'sense' must be true or false")
-        out.append((p["name"], p["body"], _vec(p, "position", where, 3), sense))
-    names = [p[0] for p in out]
-    if len(set(names)) != len(names):
-        raise SpecError(f"{kind} names must be unique: {names}")
-    return out
-
-
 def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     """Validate a ``dimensions = 3`` spec and compile it into a Figure (Model3D)."""
     if not isinstance(spec, dict):
@@ -358,8 +322,8 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         Rb, tb = in_link.get(body, (eye, np.zeros(3)))
         return tb + Rb @ x
 
-    contacts = [(n, b, at(b, x), s) for n, b, x, s in _points3d(spec.get("contacts", []), "contact", bodies)]
-    sites = [(n, b, at(b, x), s) for n, b, x, s in _points3d(spec.get("sites", []), "site", bodies)]
+    contacts = [(n, b, at(b, x), s) for n, b, x, s in parse_points(spec.get("contacts", []), "contact", bodies, 3, True)]
+    sites = [(n, b, at(b, x), s) for n, b, x, s in parse_points(spec.get("sites", []), "site", bodies, 3, True)]
     seg_bodies = list(bodies)
     total_mass = sum(b["mass"] for b in bodies.values() if body_link[b["name"]] >= 0)
     actuator_names = [d["name"] for _, d in act]
@@ -369,7 +333,6 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         "3d", actuator_names, contact_names, np.array([d["lo"] for _, d in act]),
         np.array([d["hi"] for _, d in act]), total_mass, sense_ranges or {},
         sites=[s[0] for s in sensed])
-    limits = spec.get("limits", {})
     model = Model3D(
         parent=np.array([L["parent"] for L in links], dtype=np.int64),
         jtype=np.array([L["jtype"] for L in links], dtype=np.int64),
@@ -379,10 +342,7 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         qadr=qadr, dadr=dadr, mass=mass, com=com, icom=icom, lo=lo, hi=hi, damping=damping,
         act_dof=np.array([dadr[i] for i, _ in act], dtype=np.int64),
         act_q=np.array([qadr[i] for i, _ in act], dtype=np.int64),
-        kp=np.array([d["kp"] for _, d in act], dtype=np.float64),
-        kd=np.array([d["kd"] for _, d in act], dtype=np.float64),
-        tau_max=np.array([d["tau_max"] for _, d in act], dtype=np.float64),
-        neutral=np.array([d["neutral"] for _, d in act], dtype=np.float64),
+        **servo_arrays(act),
         cp_link=np.array([body_link[c[1]] for c in contacts], dtype=np.int64),
         cp_pos=np.array([c[2] for c in contacts], dtype=np.float64).reshape(-1, 3),
         ss_link=np.array([body_link[s[1]] for s in sensed], dtype=np.int64),
@@ -393,18 +353,13 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         seg_r=np.array([bodies[b]["radius"] for b in seg_bodies], dtype=np.float64),
         fixed_rot=np.ascontiguousarray(Rroot, dtype=np.float64), fixed_pos=pos.copy(),
         base_link=body_link[root_body],
-        limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
-        limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0),
+        **limit_gains(spec),
         sense_lo=sense_lo, sense_hi=sense_hi, sense_at=sense_at, nq=nq, nv=nv)
     q_default = np.concatenate([np.asarray(L["q0"], dtype=np.float64) for L in links])
-    return Figure(
-        name=name, model=model, root=rtype, link_names=[L["name"] for L in links],
-        actuator_names=actuator_names, contact_names=contact_names,
-        site_names=[s[0] for s in sites],
-        site_link=np.array([body_link[s[1]] for s in sites], dtype=np.int64),
-        site_pos=np.array([s[2] for s in sites], dtype=np.float64).reshape(-1, 3),
-        sense_names=sense_names, body_names=seg_bodies, q_default=q_default,
-        total_mass=total_mass, description=str(spec.get("description", "")), spec=spec)
+    return figure_of(spec, model, 3, links=links, sites=sites, body_link=body_link,
+                     name=name, root=rtype, actuator_names=actuator_names,
+                     contact_names=contact_names, sense_names=sense_names, body_names=seg_bodies,
+                     q_default=q_default, total_mass=total_mass)
 
 
 def planar_spec_to_3d(spec: dict, root: str | None = None) -> dict:

@@ -8,6 +8,8 @@ import math
 import networkx as nx
 import numpy as np
 
+from ..model import Figure
+
 
 class SpecError(ValueError):
     """A figure spec is malformed or impossible; the message names the field."""
@@ -54,19 +56,87 @@ def _vec(d, key, where, n, default=None):
     return np.array(v, dtype=np.float64)
 
 
-def _body(b, i):
+def body_segment(b, i, dims):
+    """(where, mass, a, b, radius, com) of a body entry: its name, mass, capsule and centre of mass."""
     where = f"body {b.get('name', i)!r}"
     if not isinstance(b.get("name"), str) or not b["name"]:
         raise SpecError(f"body #{i}: needs a 'name'")
     mass = _num(b, "mass", where, positive=True)
     seg = b.get("segment")
-    if (not isinstance(seg, list) or len(seg) != 2):
-        raise SpecError(f"{where}: 'segment' must be [[x0, z0], [x1, z1]]")
-    a = _vec({"a": seg[0]}, "a", where + " segment", 2)
-    bb = _vec({"b": seg[1]}, "b", where + " segment", 2)
+    if not isinstance(seg, list) or len(seg) != 2:
+        form = "[[x0, z0], [x1, z1]]" if dims == 2 else "[[x0, y0, z0], [x1, y1, z1]]"
+        raise SpecError(f"{where}: 'segment' must be {form}")
+    a = _vec({"a": seg[0]}, "a", where + " segment", dims)
+    bb = _vec({"b": seg[1]}, "b", where + " segment", dims)
     radius = _num(b, "radius", where, default=0.02, positive=True)
+    com = _vec(b, "com", where, dims, default=list((a + bb) / 2))
+    return where, mass, a, bb, radius, com
+
+
+def servo_arrays(act) -> dict:
+    """kp, kd, tau_max and neutral of the actuated dofs ``act`` [(index, dof dict)]: Model fields."""
+    return {k: np.array([d[k] for _, d in act], dtype=np.float64)
+            for k in ("kp", "kd", "tau_max", "neutral")}
+
+
+def limit_gains(spec: dict) -> dict:
+    """The joint-limit spring's stiffness and damping (``[limits]``): Model fields."""
+    limits = spec.get("limits", {})
+    return dict(limit_k=_num(limits, "stiffness", "limits", default=30.0, positive=True),
+                limit_c=_num(limits, "damping", "limits", default=0.5, lo=0.0))
+
+
+def figure_of(spec, model, dims, *, links, sites, body_link, **fields):
+    """The Figure of a compiled model: names, sites (all, sensed or not) and the spec."""
+    return Figure(
+        model=model, link_names=[L["name"] for L in links],
+        site_names=[s[0] for s in sites],
+        site_link=np.array([body_link[s[1]] for s in sites], dtype=np.int64),
+        site_pos=np.array([s[2] for s in sites], dtype=np.float64).reshape(-1, dims),
+        description=str(spec.get("description", "")), spec=spec, **fields)
+
+
+def joint_where(j, bodies, i) -> str:
+    """A joint entry's name for messages, once its names and bodies are checked."""
+    where = f"joint {j.get('name', i)!r}"
+    for k in ("name", "parent", "child"):
+        if not isinstance(j.get(k), str):
+            raise SpecError(f"{where}: needs '{k}' (a name)")
+    for k in ("parent", "child"):
+        if j[k] not in bodies:
+            raise SpecError(f"{where}: unknown {k} body {j[k]!r}")
+    return where
+
+
+def parse_points(items, kind, bodies, dims, sensed_sites):
+    """Named points on bodies (contacts, sites): [(name, body, position, sense)].
+
+    ``sense`` (sites only, and only where ``sensed_sites``) puts the site's position in the senses.
+    """
+    out = []
+    if not isinstance(items, list):
+        raise SpecError(f"{kind}s must be a list of tables")
+    for i, p in enumerate(items):
+        if not isinstance(p, dict):
+            raise SpecError(f"{kind} #{i}: must be a table")
+        where = f"{kind} {p.get('name', i)!r}"
+        if not isinstance(p.get("name"), str) or p.get("body") not in bodies:
+            raise SpecError(f"{where}: needs a 'name' and a known 'body'")
+        sense = p.get("sense", False)
+        if "sense" in p and not (kind == "site" and sensed_sites):
+            raise SpecError(f"{where}: only sites of 3-D figures take 'sense'")
+        if not isinstance(sense, bool):
+            raise SpecError(f"{where}: 'sense' must be true or false")
+        out.append((p["name"], p["body"], _vec(p, "position", where, dims), sense))
+    names = [p[0] for p in out]
+    if len(set(names)) != len(names):
+        raise SpecError(f"{kind} names must be unique: {names}")
+    return out
+
+
+def _body(b, i):
+    where, mass, a, bb, radius, com = body_segment(b, i, 2)
     length = float(np.hypot(*(bb - a)))
-    com = _vec(b, "com", where, 2, default=list((a + bb) / 2))
     shape = b.get("shape", "rod")
     if "inertia" in b:
         inertia = _num(b, "inertia", where, positive=True)

@@ -55,3 +55,20 @@ def servo(x, w, target, neutral, lo, hi, kp, kd, tau_max, tau_c, actuation, dt):
         return min(tau_max, max(-tau_max, u)), 0, 0.0, arm
     tc = max(tau_c, 2.0 * dt)
     return 0.0, 1, (target - x - 2.0 * tc * w) / (tc * tc), 0.0
+
+
+@njit(**_INLINE)
+def apply_servos(M, q, qd, targets, taus, actuation, dt, act_q, tau, presc, presc_qdd, arm):
+    """Add every actuator's servo torque (or prescribed acceleration) to its dof.
+
+    Actuator a drives dof ``M.act_dof[a]``, whose angle is ``q[act_q[a]]``.
+    """
+    for a in range(M.act_dof.shape[0]):
+        d = M.act_dof[a]
+        u, p, acc, ar = servo(q[act_q[a]], qd[d], targets[a], M.neutral[a], M.lo[d], M.hi[d],
+                              M.kp[a], M.kd[a], M.tau_max[a], taus[a], actuation, dt)
+        tau[d] += u
+        arm[d] += ar
+        if p:
+            presc[d] = 1
+            presc_qdd[d] = acc

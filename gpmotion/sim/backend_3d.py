@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..model import FREE3D, SLIDE3D
+from ..model import FREE3D, HINGE3D, SLIDE3D
 from . import geometry3d
 from .spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass, compute_senses3d,
                         ground_contacts, integrate, joint_torques, kinematics, pole_contacts)
@@ -18,9 +18,13 @@ from .spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass, c
 NAME = "3d"
 CONTACT_WIDTH = 3          # friction state per contact point: anchor x, y, touching (0/1)
 COM_WIDTH = 6              # com channel: x, y, z, vx, vy, vz
+UP = 2                     # the vertical axis of a point (x, y, z)
 # flags of the episode loop the steps are inlined into: FMA contraction only
 # (no other fast-math: the NaN checks stay), ~10 % on the humanoid
 JIT = dict(cache=True, error_model="numpy", boundscheck=False, fastmath={"contract"})
+# observe/advance: compiled once per backend (cached on disk) and called by every
+# controller's loop, so a new controller compiles its loop, not the physics again
+STEP = JIT
 _INLINE = dict(cache=True, error_model="numpy", boundscheck=False, inline="always")
 
 
@@ -66,7 +70,7 @@ def workspace(M, nv, contact):
                 contact[:, 0:2].copy(), contact[:, 2].copy())
 
 
-@njit(**_INLINE)
+@njit(**STEP)
 def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
     """Kinematics, contact forces (into w.fext), com and senses of the current state;
     returns the deepest pole penetration."""
@@ -84,7 +88,7 @@ def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
     return pen
 
 
-@njit(**_INLINE)
+@njit(**STEP)
 def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
     """One step of dt from the observed state: (finite?, energy + actuator work)."""
     tau = w.tau
@@ -146,3 +150,41 @@ def reference_q(model):
 def slides(model, link) -> bool:
     """Does ``link``'s joint translate the body it carries?"""
     return int(model.jtype[link]) == SLIDE3D
+
+
+def height_coordinate(model):
+    """The q index of the figure's height (a free root's z), or None when it has none."""
+    free = np.flatnonzero(model.jtype == FREE3D)
+    return int(model.qadr[0] + 2) if free.size and free[0] == 0 else None
+
+
+def perturb(model, q, qd, rng, s) -> None:
+    """Perturb K states q [K, nq], qd [K, nv] in place by normal steps of the sizes ``s``
+    (a free root: position, orientation, velocity, angular; hinges: joint/angular;
+    slides: position/velocity)."""
+    m = model
+    k = q.shape[0]
+    zq, zv = rng.standard_normal((k, m.nq)), rng.standard_normal((k, m.nv))
+    for link in range(len(m.parent)):
+        a, d = m.qadr[link], m.dadr[link]
+        if m.jtype[link] == FREE3D:
+            q[:, a:a + 3] += s.position * zq[:, a:a + 3]
+            q[:, a + 3:a + 7] = _rotate(q[:, a + 3:a + 7], s.orientation * zq[:, a + 3:a + 6])
+            qd[:, d:d + 3] += s.angular * zv[:, d:d + 3]       # q̇ = (ω_body, v_body)
+            qd[:, d + 3:d + 6] += s.velocity * zv[:, d + 3:d + 6]
+        else:
+            size = s.joint if m.jtype[link] == HINGE3D else s.position
+            q[:, a] = np.clip(q[:, a] + size * zq[:, a], m.lo[d], m.hi[d])
+            qd[:, d] += (s.angular if m.jtype[link] == HINGE3D else s.velocity) * zv[:, d]
+
+
+def _rotate(quat, rotvec):
+    """quat ⊗ exp(rotvec / 2): a body-frame rotation by |rotvec| rad, renormalized."""
+    angle = np.linalg.norm(rotvec, axis=1, keepdims=True)
+    axis = np.where(angle > 0, rotvec / np.where(angle > 0, angle, 1.0), 0.0)
+    w2, v2 = np.cos(angle / 2), axis * np.sin(angle / 2)
+    w1, v1 = quat[:, :1], quat[:, 1:]
+    w = w1 * w2 - np.sum(v1 * v2, axis=1, keepdims=True)
+    v = w1 * v2 + w2 * v1 + np.cross(v1, v2)
+    out = np.concatenate([w, v], axis=1)
+    return out / np.linalg.norm(out, axis=1, keepdims=True)

@@ -13,6 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from ..model import REVOLUTE, SLIDE_X, SLIDE_Z
 from . import geometry
 from .planar import (aba, centre_of_mass, ground_contacts, integrate, joint_torques, kinematics,
                      pole_contacts)
@@ -21,9 +22,13 @@ from .senses import compute_senses
 NAME = "planar"
 CONTACT_WIDTH = 2          # friction state per contact point: anchor x, touching (0/1)
 COM_WIDTH = 4              # com channel: x, z, vx, vz
+UP = 1                     # the vertical axis of a point (x, z)
 # flags of the episode loop the steps are inlined into (no FMA contraction:
 # it measured no gain here, and results stay those of the first kernels)
 JIT = dict(cache=True, error_model="numpy", boundscheck=False)
+# observe/advance: compiled once per backend (cached on disk) and called by every
+# controller's loop, so a new controller compiles its loop, not the physics again
+STEP = JIT
 _INLINE = dict(JIT, inline="always")
 
 
@@ -58,7 +63,7 @@ def workspace(M, nv, contact):
                 contact[:, 0].copy(), contact[:, 1].copy())
 
 
-@njit(**_INLINE)
+@njit(**STEP)
 def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
     """Kinematics, contact forces (into w.fext), com and senses of the current state;
     returns the deepest pole penetration."""
@@ -77,7 +82,7 @@ def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
     return pen
 
 
-@njit(**_INLINE)
+@njit(**STEP)
 def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
     """One step of dt from the observed state: (finite?, energy + actuator work)."""
     tau = w.tau
@@ -145,3 +150,23 @@ def slides(model, link) -> bool:
     """Does ``link``'s joint translate the body it carries?  Between bodies never:
     the only planar slides are a planar root's x and z (the figure's position)."""
     return False
+
+
+def height_coordinate(model):
+    """The q index of the figure's height (its root z slide), or None when it has none."""
+    zs = np.flatnonzero(model.jtype == SLIDE_Z)
+    return int(zs[0]) if zs.size else None
+
+
+def perturb(model, q, qd, rng, s) -> None:
+    """Perturb K states q [K, nq], qd [K, nv] in place by normal steps of the sizes ``s``
+    (root slides: position/velocity; root pitch: orientation/angular; joints: joint/angular)."""
+    m = model
+    k, n = q.shape
+    z = rng.standard_normal((2, k, n))                         # drawn whole: same stream for any sizes
+    slide = (m.jtype == SLIDE_X) | (m.jtype == SLIDE_Z)
+    root_pitch = (m.jtype == REVOLUTE) & np.isin(m.parent, np.flatnonzero(slide))
+    joint = (m.jtype == REVOLUTE) & ~root_pitch
+    q += z[0] * np.where(slide, s.position, np.where(root_pitch, s.orientation, s.joint))
+    qd += z[1] * np.where(slide, s.velocity, s.angular)
+    q[:, joint] = np.clip(q[:, joint], m.lo[joint], m.hi[joint])

@@ -43,7 +43,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .actuation import limit_torque, servo
+from .actuation import apply_servos, limit_torque
+from .poles import closest_to_pole
 
 REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
 
@@ -141,7 +142,6 @@ def aba(M, qd, X, v, cbias, tau, fext, presc, presc_qdd, arm, gravity, IA, pA, d
         IA[i, 0], IA[i, 1], IA[i, 2] = i00, i01, i02
         IA[i, 3], IA[i, 4], IA[i, 5] = m, 0.0, m
         v0, v1, v2 = v[i, 0], v[i, 1], v[i, 2]
-        h0 = i00 * v0 + i01 * v1 + i02 * v2
         h1 = i01 * v0 + m * v1
         h2 = i02 * v0 + m * v2
         # crf(v) · h  =  (−vz h1 + vx h2, −ω h2, ω h1)
@@ -353,13 +353,7 @@ def pole_contacts(M, S, pose, cs, v, fext):
                 c, s, ox, oz, w, v1, v2 = fc, fs, fx, fz, 0.0, 0.0, 0.0
             ax, az = ox + c * sax - s * saz, oz + s * sax + c * saz
             bx, bz = ox + c * sbx - s * sbz, oz + s * sbx + c * sbz
-            dx, dz = bx - ax, bz - az
-            L2 = dx * dx + dz * dz
-            t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
-            t = min(1.0, max(0.0, t))
-            qx, qz = ax + t * dx, az + t * dz
-            ex, ez = qx - cx, qz - cz
-            dist = np.sqrt(ex * ex + ez * ez)
+            t, ex, ez, dist = closest_to_pole(ax, az, bx, bz, cx, cz)
             pen = r + rp - dist
             hit = pen > 0.0 and dist != 0.0
             if hit:
@@ -394,15 +388,7 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd,
         presc[i] = 0
         arm[i] = 0.0
         tau[i] += limit_torque(q[i], qd[i], M.lo[i], M.hi[i], limit_k, limit_c)
-    for a in range(M.act_dof.shape[0]):
-        i = M.act_dof[a]
-        u, p, acc, ar = servo(q[i], qd[i], targets[a], M.neutral[a], M.lo[i], M.hi[i], M.kp[a],
-                              M.kd[a], M.tau_max[a], taus[a], actuation, dt)
-        tau[i] += u
-        arm[i] += ar
-        if p:
-            presc[i] = 1
-            presc_qdd[i] = acc
+    apply_servos(M, q, qd, targets, taus, actuation, dt, M.act_dof, tau, presc, presc_qdd, arm)
 
 
 @njit(**_INLINE)

@@ -129,13 +129,23 @@ def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_n
     senses[at[T]] = t
     senses[at[COM_X]] = com[0]
     senses[at[COM_VX]] = com[2]
-    a0, r0, f0 = at[ANGLE], at[RATE], at[FORCE]
-    for a in range(M.act_dof.shape[0]):
-        i = M.act_dof[a]
-        senses[a0 + a] = q[i]
-        senses[r0 + a] = qd[i]
+    joint_senses(senses, at[ANGLE], at[RATE], at[FORCE], q, qd, M.act_dof, M.act_dof, cforce)
+    normalize_senses(M, senses, senses_norm)
+
+
+@njit(cache=True, error_model="numpy", boundscheck=False, inline="always")
+def joint_senses(senses, a0, r0, f0, q, qd, act_q, act_dof, cforce):
+    """Actuated joint angles and rates, then contact forces, from their blocks' offsets."""
+    for a in range(act_dof.shape[0]):
+        senses[a0 + a] = q[act_q[a]]
+        senses[r0 + a] = qd[act_dof[a]]
     for k in range(cforce.shape[0]):
         senses[f0 + k] = cforce[k]
+
+
+@njit(cache=True, error_model="numpy", boundscheck=False, inline="always")
+def normalize_senses(M, senses, senses_norm):
+    """Every sense mapped to [0, 1] over its range (a zero-width range: 0.5)."""
     for k in range(M.sense_lo.shape[0]):
         lo, hi = M.sense_lo[k], M.sense_hi[k]
         span = hi - lo

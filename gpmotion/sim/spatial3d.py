@@ -60,8 +60,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .actuation import limit_torque, servo
-from .senses import SLOTS
+from .actuation import apply_servos, limit_torque
+from .poles import closest_to_pole
+from .senses import SLOTS, joint_senses, normalize_senses
 
 HINGE, SLIDE, FREE = 0, 1, 2
 
@@ -264,21 +265,22 @@ def body_inertias(M, Ib):
 def _sym_congruence(a00, a01, a02, a11, a12, a22,
                     e00, e01, e02, e10, e11, e12, e20, e21, e22):
     """Eᵀ A E for a symmetric A (upper triangles in and out)."""
-    t00 = a00 * e00 + a01 * e10 + a02 * e20
-    t01 = a00 * e01 + a01 * e11 + a02 * e21
-    t02 = a00 * e02 + a01 * e12 + a02 * e22
-    t10 = a01 * e00 + a11 * e10 + a12 * e20
-    t11 = a01 * e01 + a11 * e11 + a12 * e21
-    t12 = a01 * e02 + a11 * e12 + a12 * e22
-    t20 = a02 * e00 + a12 * e10 + a22 * e20
-    t21 = a02 * e01 + a12 * e11 + a22 * e21
-    t22 = a02 * e02 + a12 * e12 + a22 * e22
-    return (e00 * t00 + e10 * t10 + e20 * t20,
-            e00 * t01 + e10 * t11 + e20 * t21,
-            e00 * t02 + e10 * t12 + e20 * t22,
-            e01 * t01 + e11 * t11 + e21 * t21,
-            e01 * t02 + e11 * t12 + e21 * t22,
-            e02 * t02 + e12 * t12 + e22 * t22)
+    r = _congruence(a00, a01, a02, a01, a11, a12, a02, a12, a22,
+                    e00, e01, e02, e10, e11, e12, e20, e21, e22)
+    return r[0], r[1], r[2], r[4], r[5], r[8]
+
+
+@njit(**_INLINE)
+def _force_to_parent(n0, n1, n2, f0, f1, f2, e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                     r0, r1, r2):
+    """A spatial force (n, f) in parent coordinates: f' = Eᵀ f, n' = Eᵀ n + r × f'."""
+    g0 = e00 * f0 + e10 * f1 + e20 * f2
+    g1 = e01 * f0 + e11 * f1 + e21 * f2
+    g2 = e02 * f0 + e12 * f1 + e22 * f2
+    m0 = e00 * n0 + e10 * n1 + e20 * n2 + (r1 * g2 - r2 * g1)
+    m1 = e01 * n0 + e11 * n1 + e21 * n2 + (r2 * g0 - r0 * g2)
+    m2 = e02 * n0 + e12 * n1 + e22 * n2 + (r0 * g1 - r1 * g0)
+    return m0, m1, m2, g0, g1, g2
 
 
 @njit(**_INLINE)
@@ -440,12 +442,8 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity,
         di = 0.0 if pr else 1.0 / (d + ai)
         u = ti - sp
         # U in parent coordinates, Ũ = Xᵀ U (Ũ·a_p = U·X a_p: pass 3's dot product)
-        tf0 = e00 * uf0 + e10 * uf1 + e20 * uf2
-        tf1 = e01 * uf0 + e11 * uf1 + e21 * uf2
-        tf2 = e02 * uf0 + e12 * uf1 + e22 * uf2
-        tn0 = e00 * un0 + e10 * un1 + e20 * un2 + (r1 * tf2 - r2 * tf1)
-        tn1 = e01 * un0 + e11 * un1 + e21 * un2 + (r2 * tf0 - r0 * tf2)
-        tn2 = e02 * un0 + e12 * un1 + e22 * un2 + (r0 * tf1 - r1 * tf0)
+        tn0, tn1, tn2, tf0, tf1, tf2 = _force_to_parent(
+            un0, un1, un2, uf0, uf1, uf2, e00, e01, e02, e10, e11, e12, e20, e21, e22, r0, r1, r2)
         uc = (un0 * g0 + un1 * g1) + (un2 * g2 + uf0 * g3) + (uf1 * g4 + uf2 * g5)
         k = (u - uc) * di
         U[i, 0], U[i, 1], U[i, 2], U[i, 3], U[i, 4], U[i, 5] = un0, un1, un2, uf0, uf1, uf2
@@ -470,12 +468,9 @@ def aba_packed(M, qd, E, r, v, cbias, tau, fext, presc, presc_qdd, arm, gravity,
                 b00, b01, b02, b10, b11, b12, b20, b21, b22,
                 e00, e01, e02, e10, e11, e12, e20, e21, e22)
             # forces: f' = Eᵀ f,  n' = Eᵀ n + r × f'
-            f0 = e00 * qf0 + e10 * qf1 + e20 * qf2
-            f1 = e01 * qf0 + e11 * qf1 + e21 * qf2
-            f2 = e02 * qf0 + e12 * qf1 + e22 * qf2
-            n0 = e00 * qn0 + e10 * qn1 + e20 * qn2 + (r1 * f2 - r2 * f1)
-            n1 = e01 * qn0 + e11 * qn1 + e21 * qn2 + (r2 * f0 - r0 * f2)
-            n2 = e02 * qn0 + e12 * qn1 + e22 * qn2 + (r0 * f1 - r1 * f0)
+            n0, n1, n2, f0, f1, f2 = _force_to_parent(
+                qn0, qn1, qn2, qf0, qf1, qf2, e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                r0, r1, r2)
             if r0 != 0.0 or r1 != 0.0 or r2 != 0.0:
                 # ... then shift them by r: P = r× C', Z = r× B'ᵀ, W = P r×
                 p00, p01, p02 = r1 * c02 - r2 * c01, r1 * c12 - r2 * c11, r1 * c22 - r2 * c12
@@ -740,13 +735,7 @@ def pole_contacts(M, S, R, pos, v, fext):
             else:
                 ax, ay, az = fixed_point_world(FR, Fp, sa0, sa1, sa2)
                 bx, by, bz = fixed_point_world(FR, Fp, sb0, sb1, sb2)
-            dx, dz = bx - ax, bz - az
-            L2 = dx * dx + dz * dz
-            t = ((cx - ax) * dx + (cz - az) * dz) / L2 if L2 > 0 else 0.0
-            t = min(1.0, max(0.0, t))
-            qx, qz = ax + t * dx, az + t * dz
-            ex, ez = qx - cx, qz - cz
-            dist = np.sqrt(ex * ex + ez * ez)
+            t, ex, ez, dist = closest_to_pole(ax, az, bx, bz, cx, cz)
             pen = rr + rp - dist
             if pen <= 0.0 or dist == 0.0:
                 continue
@@ -780,15 +769,7 @@ def joint_torques(M, q, qd, targets, taus, actuation, dt, tau, presc, presc_qdd,
         d = M.dadr[i]
         x = q[M.qadr[i]]
         tau[d] += limit_torque(x, qd[d], M.lo[d], M.hi[d], limit_k, limit_c)
-    for a in range(M.act_dof.shape[0]):
-        d = M.act_dof[a]
-        u, p, acc, ar = servo(q[M.act_q[a]], qd[d], targets[a], M.neutral[a], M.lo[d], M.hi[d],
-                              M.kp[a], M.kd[a], M.tau_max[a], taus[a], actuation, dt)
-        tau[d] += u
-        arm[d] += ar
-        if p:
-            presc[d] = 1
-            presc_qdd[d] = acc
+    apply_servos(M, q, qd, targets, taus, actuation, dt, M.act_q, tau, presc, presc_qdd, arm)
 
 
 # ---------------------------------------------------------------- body measures
@@ -949,11 +930,7 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_n
     senses[at[S_COM_VX]] = com[3]
     senses[at[S_COM_VY]] = com[4]
     a0, r0, f0, site0 = at[S_ANGLE], at[S_RATE], at[S_FORCE], at[S_SITE]
-    for a in range(M.act_dof.shape[0]):
-        senses[a0 + a] = q[M.act_q[a]]
-        senses[r0 + a] = qd[M.act_dof[a]]
-    for k in range(cforce.shape[0]):
-        senses[f0 + k] = cforce[k]
+    joint_senses(senses, a0, r0, f0, q, qd, M.act_q, M.act_dof, cforce)
     g0, g1, g2 = goal[0], goal[1], goal[2]
     for k in range(M.ss_link.shape[0]):     # sensed sites: world position − goal
         i = M.ss_link[k]
@@ -969,8 +946,4 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_n
         senses[site0 + 3 * k] = px - g0
         senses[site0 + 3 * k + 1] = py - g1
         senses[site0 + 3 * k + 2] = pz - g2
-    for k in range(M.sense_lo.shape[0]):
-        lo, hi = M.sense_lo[k], M.sense_hi[k]
-        span = hi - lo
-        yk = (senses[k] - lo) / span if span > 0 else 0.5
-        senses_norm[k] = min(1.0, max(0.0, yk))
+    normalize_senses(M, senses, senses_norm)

@@ -6,6 +6,8 @@ different algorithm from the kernel's ABA, so agreement is meaningful.
 """
 import numpy as np
 
+from .hybrid import hybrid_dynamics
+
 REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
 
 
@@ -101,21 +103,8 @@ def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None, a
     joint force is ``tau − arm·qdd``, so the system matrix is H + diag(arm);
     the returned torques of free dofs are those joint forces.
     """
-    n = len(q)
-    presc = np.zeros(n, bool) if presc is None else np.asarray(presc, bool)
-    arm = np.zeros(n) if arm is None else np.asarray(arm, float)
-    C = rnea(M, q, qd, np.zeros(n), gravity, fext)
-    H = crba(M, q) + np.diag(np.where(presc, 0.0, arm))
-    free = ~presc
-    qdd = np.zeros(n)
-    if presc.any():
-        qdd[presc] = np.asarray(presc_qdd)[presc]
-    rhs = tau[free] - C[free] - H[np.ix_(free, presc)] @ qdd[presc]
-    qdd[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
-    tau_out = np.array(tau, dtype=float)
-    tau_out[presc] = (H @ qdd + C)[presc]          # arm is 0 on prescribed dofs
-    tau_out[free] -= arm[free] * qdd[free]
-    return qdd, tau_out
+    C = rnea(M, q, qd, np.zeros(len(qd)), gravity, fext)
+    return hybrid_dynamics(crba(M, q), C, np.asarray(tau, dtype=float), presc, presc_qdd, arm)
 
 
 def poses_and_velocities(M, q, qd):

@@ -7,6 +7,8 @@ something.  A free root is a 6-dof joint with S = 1₆ (body coordinates).
 """
 import numpy as np
 
+from .hybrid import hybrid_dynamics
+
 HINGE, SLIDE, FREE = 0, 1, 2
 
 
@@ -138,20 +140,8 @@ def forward_dynamics(M, q, qd, tau, gravity, fext, presc=None, presc_qdd=None, a
     joint force is ``tau − arm·qdd``, so the system matrix is H + diag(arm);
     the returned forces of free dofs are those joint forces.
     """
-    nv = len(qd)
-    presc = np.zeros(nv, bool) if presc is None else np.asarray(presc, bool)
-    arm = np.zeros(nv) if arm is None else np.asarray(arm, float)
-    C = rnea(M, q, qd, np.zeros(nv), gravity, fext)
-    H = crba(M, q) + np.diag(np.where(presc, 0.0, arm))
-    free = ~presc
-    qdd = np.zeros(nv)
-    qdd[presc] = np.asarray(presc_qdd)[presc] if presc.any() else 0.0
-    rhs = tau[free] - C[free] - H[np.ix_(free, presc)] @ qdd[presc]
-    qdd[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
-    tau_out = np.array(tau, dtype=float)
-    tau_out[presc] = (H @ qdd + C)[presc]          # arm is 0 on prescribed dofs
-    tau_out[free] -= arm[free] * qdd[free]
-    return qdd, tau_out
+    C = rnea(M, q, qd, np.zeros(len(qd)), gravity, fext)
+    return hybrid_dynamics(crba(M, q), C, np.asarray(tau, dtype=float), presc, presc_qdd, arm)
 
 
 def frames_and_velocities(M, q, qd):
