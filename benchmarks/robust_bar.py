@@ -10,6 +10,8 @@ script is started again.  Prints a markdown table and a summary line.
 
     python benchmarks/robust_bar.py --task lamp_hop --seeds 5 --starts 8 \
         --search stop_on_success=true
+    python benchmarks/robust_bar.py --task lamp_hop --seeds 5 --starts 8 --confirm 24 \
+        --require 0.9 --extend 40 --search stop_on_success=true --search population=100
     python benchmarks/robust_bar.py --task starman_travel --controller bsr-time \
         --param seconds=2 --search n_generations=300 --seeds 5 --starts 4
 """
@@ -46,6 +48,22 @@ def one_run(cfg: RunConfig, out: Path) -> float:
     return time.perf_counter() - t0
 
 
+def stopped(out: Path) -> bool:
+    """Did the run stop on success (GP ``stop_on_success``), rather than run out of generations?"""
+    return bool(json.loads((out / "checkpoint.json").read_text())["search"].get("stopped", False))
+
+
+def extend(out: Path, n: int) -> float:
+    """Add n generations to a finished run that did not stop on success (once); seconds spent."""
+    cfg = json.loads((out / "config.json").read_text())
+    if not n or stopped(out) or cfg.get("extended_generations") is not None:
+        return 0.0
+    t0 = time.perf_counter()
+    (out / "best.json").unlink()
+    run(None, out, resume=True, quiet=True, artifacts=False, extend_generations=n)
+    return time.perf_counter() - t0
+
+
 def judge(out: Path, trials: int) -> dict:
     task, family, actuation, genome, _ = load_controller(str(out))
     r = robustness(task, family, actuation, genome, trials=trials, seed=0)
@@ -59,7 +77,11 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--starts", type=int, default=8, help="K perturbed starts per controller")
-    ap.add_argument("--aggregate", default="mean", choices=["mean", "worst"])
+    ap.add_argument("--aggregate", default="mean", help="mean, worst or qNN (q80: the 80th-percentile start)")
+    ap.add_argument("--confirm", type=int, default=0, help="M confirmation starts (robust run only)")
+    ap.add_argument("--require", type=float, default=1.0, help="success = this fraction of starts")
+    ap.add_argument("--extend", type=int, default=0, metavar="N",
+                    help="a robust run that found no confirmed solver gets N more generations (once)")
     ap.add_argument("--trials", type=int, default=100)
     ap.add_argument("--param", action="append", metavar="KEY=VALUE", help="task parameter")
     ap.add_argument("--search", action="append", metavar="KEY=VALUE", help="search setting (both runs)")
@@ -68,28 +90,40 @@ def main(argv=None):
     a = ap.parse_args(argv)
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
     base = Path(a.out) / f"{a.task}-{a.controller}"
+    tag = "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require)) if v not in (0, 1.0))
+    tag += "" if a.aggregate == "mean" else f"-{a.aggregate}"
     rows = []
     for seed in range(a.first_seed, a.first_seed + a.seeds):
         row = {"seed": seed}
-        for kind, robust in (("nominal", {}), ("robust", {"starts": a.starts, "aggregate": a.aggregate})):
-            out = base / f"{kind}-seed{seed}"
+        method = {"starts": a.starts, "aggregate": a.aggregate,
+                  **({"confirm": a.confirm} if a.confirm else {}),
+                  **({"require": a.require} if a.require != 1.0 else {})}
+        for kind, robust in (("nominal", {}), ("robust", method)):
+            out = base / (f"{kind}-seed{seed}" if kind == "nominal" else f"{kind}{tag}-seed{seed}")
             cfg = RunConfig(task=a.task, family=a.controller, seed=seed, params=dict(params),
                             search=dict(search), robust=robust)
             row[f"{kind}_wall_s"] = round(one_run(cfg, out), 1)
+            if kind == "robust":
+                row["robust_wall_s"] += round(extend(out, a.extend), 1)
+                row["robust_stopped"] = stopped(out)
+                row["robust_generations"] = len((out / "log.csv").read_text().splitlines()) - 1
             row[kind] = judge(out, a.trials)
         rows.append(row)
         print(json.dumps(row), file=sys.stderr, flush=True)
     if a.json:
         print(json.dumps(rows))
         return 0
-    print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}) vs nominal; "
+    print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}), confirm {a.confirm}, "
+          f"require {a.require} vs nominal; "
           f"success from {a.trials} perturbed starts (trial 0 nominal)")
-    print("| seed | evolved nominally: success | nominal start | evolved robust: success | nominal start |")
-    print("|---|---|---|---|---|")
+    print("| seed | evolved nominally: success | nominal start | evolved robust: success | nominal start "
+          "| robust run: generations, stopped on a confirmed solver |")
+    print("|---|---|---|---|---|---|")
     for r in rows:
         n, b = r["nominal"], r["robust"]
         print(f"| {r['seed']} | {100 * n['success_rate']:.0f} % | {'ok' if n['nominal_success'] else 'fails'} "
-              f"| {100 * b['success_rate']:.0f} % | {'ok' if b['nominal_success'] else 'fails'} |")
+              f"| {100 * b['success_rate']:.0f} % | {'ok' if b['nominal_success'] else 'fails'} "
+              f"| {r['robust_generations']}, {'yes' if r['robust_stopped'] else 'no'} |")
     for kind in ("nominal", "robust"):
         s = sorted(r[kind]["success_rate"] for r in rows)
         print(f"{kind}: median {100 * s[len(s) // 2]:.0f} %, mean {100 * sum(s) / len(s):.0f} %, "

@@ -252,6 +252,7 @@ class Function:
     result: str          # "number", "signal" or "same" (the widest argument kind)
     doc: str
     fn: Callable         # (ctx, window, *values) -> array
+    names: str = "site"  # what a quoted name names: a "site" or a "contact" point of the figure
 
 
 FUNCTIONS: dict[str, Function] = {
@@ -278,4 +279,8 @@ FUNCTIONS: dict[str, Function] = {
     "site_z": Function(("name",), "signal", "height of a named site (m)", _site_axis("z")),
     "goal_distance_of": Function(("name",), "signal", "distance from a named site to the phase's scene goal (m)",
                                  lambda c, w, name: c.signal(_goal_distance(c.traj, name, _scene(c, w)))),
+    "force_of": Function(("name",), "signal", 'ground normal force on a named contact point, e.g. '
+                         'force_of("head_tip") (N)', lambda c, w, name: c.signal(
+                             np.asarray(c.traj.contact_force, np.float64)[..., c.traj.figure.contact_names.index(name)]),
+                         names="contact"),
 }

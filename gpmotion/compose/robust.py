@@ -30,7 +30,19 @@ from ..sim.backend import backend_of
 from ..sim.rollout import rollout
 from ..task import WORST
 
-AGGREGATES = ("mean", "worst")
+AGGREGATES = ("mean", "worst")       # and "qNN": the NN-th percentile start (q80, q90, ...)
+
+
+def is_aggregate(how) -> bool:
+    return how in AGGREGATES or (isinstance(how, str) and len(how) == 3 and how[0] == "q"
+                                 and how[1:].isdigit() and 1 <= int(how[1:]) <= 99)
+
+
+def _order_index(n_starts: int, how: str) -> int:
+    """The start an aggregate "qNN" picks among n sorted costs: the NN-th percentile (inverted CDF,
+    so q80 of 8 costs is the 7th lowest — the cost that 80 % of starts do at least as well as)."""
+    q = int(how[1:]) / 100.0
+    return min(n_starts - 1, max(0, int(np.ceil(q * n_starts - 1e-9)) - 1))
 
 
 @dataclass(frozen=True)
@@ -70,6 +82,12 @@ def sizes_for(figure: str) -> Perturbation:
 def round_rng(seed: int, round_: int) -> np.random.Generator:
     """The generator of one round's starts: a function of (seed, round) only."""
     return np.random.default_rng([int(seed), int(round_), 0x0B5A])
+
+
+def confirm_rng(seed: int, round_: int) -> np.random.Generator:
+    """The generator of one round's confirmation starts (``confirm``): neither a
+    training round's nor the robustness judge's."""
+    return np.random.default_rng([int(seed), int(round_), 0xC0F1])
 
 
 def trial_rng(seed: int) -> np.random.Generator:
@@ -128,11 +146,13 @@ def robust_rollout(figure, scene, batch: ControllerBatch, q0s, qd0s, **rollout_k
 
 def aggregate(costs, k: int, how: str = "mean") -> np.ndarray:
     """Fold costs [N·K] (lower is better) into one per controller [N]; a non-finite cost counts as WORST."""
-    if how not in AGGREGATES:
-        raise ValueError(f"aggregate must be one of {', '.join(AGGREGATES)}, got {how!r}")
+    if not is_aggregate(how):
+        raise ValueError(f"aggregate must be one of {', '.join(AGGREGATES)} or qNN, got {how!r}")
     c = np.asarray(costs, dtype=np.float64).reshape(-1, k)
     c = np.where(np.isfinite(c), c, WORST)
-    return c.mean(axis=1) if how == "mean" else c.max(axis=1)
+    if how in AGGREGATES:
+        return c.mean(axis=1) if how == "mean" else c.max(axis=1)
+    return np.sort(c, axis=1)[:, _order_index(k, how)]
 
 
 def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str = "mean",
@@ -182,7 +202,7 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
 # ---------------------------------------------------------------- a run's robust setting
 
 SIZE_KEYS = tuple(Perturbation.__dataclass_fields__)
-SETTING_KEYS = ("starts", "aggregate", *SIZE_KEYS)
+SETTING_KEYS = ("starts", "aggregate", *SIZE_KEYS, "confirm", "require")
 MAX_STARTS = 1000
 
 
@@ -199,13 +219,20 @@ def normalize(robust: dict | None, task) -> dict:
     out = {"starts": int(validate_number("--robust-starts", robust.get("starts", 1), lo=1,
                                          hi=MAX_STARTS, integer=True)),
            "aggregate": robust.get("aggregate", "mean")}
-    if out["aggregate"] not in AGGREGATES:
-        raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)}, "
+    if not is_aggregate(out["aggregate"]):
+        raise ConfigError(f"--robust-aggregate must be one of {', '.join(AGGREGATES)} or qNN (q80: the "
+                          f"80th-percentile start), "
                          f"got {out['aggregate']!r}")
     default = asdict(sizes_for(type(task).figure))
     for k in SIZE_KEYS:
         v = robust.get(k, default[k])
         out[k] = float(validate_number(f"--perturb {k}", v, lo=0, hi=10.0))
+    # written only when set, so configs from before these options read back unchanged
+    if robust.get("confirm", 0):
+        out["confirm"] = int(validate_number("--robust-confirm", robust["confirm"], lo=0,
+                                             hi=MAX_STARTS, integer=True))
+    if robust.get("require", 1.0) != 1.0:
+        out["require"] = float(validate_number("--robust-require", robust["require"], lo=0.01, hi=1.0))
     return out
 
 
@@ -220,32 +247,74 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     holds a normalized setting plus the run's ``seed``.  The starts depend on
     (seed, generation) only, so chunks on any backend and a resumed run see
     the same ones.  Per controller: cost = the aggregate of its K costs;
-    success = it succeeds from every start; failed = some start diverged;
-    measures = those of the mean (``mean``: the mean over starts) or of the
-    worst start (``worst``), so a cost recomputed from them (the final-weights
-    column) agrees with the aggregate; extras (BSR senses) from its first start.
+    success = it succeeds from at least ``require`` (default: every one) of
+    its starts; failed = some start diverged; measures = those of the mean
+    (``mean``: the mean over starts), of the worst start (``worst``) or of the
+    NN-th percentile start (``qNN``: the cost 80 % of starts match, for q80), so a
+    cost recomputed from them (the final-weights column) agrees with the
+    aggregate; extras (BSR senses) from its first start.
+
+    ``confirm`` = M > 0: a controller that succeeds from ``require`` of its K
+    starts is run from M more (``confirm_rng(seed, generation)``), and its
+    cost, measures and success are over all K + M.  Why: "succeeds from all
+    K = 8 starts" is passed by luck — a controller that succeeds from 70 % of
+    starts does so 6 % of the time, and a population of 300 has many — so
+    ``stop_on_success`` and the best-ever cost picked lucky controllers.
     """
     from ..evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
-    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, round_rng(r["seed"], generation),
-                                 sizes_of(r))
-    traj = robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
+    traj = _batch_rollout(ev, genomes, progress, k, round_rng(r["seed"], generation))
+    costs, measures, ok = task.score(traj, progress)
+    costs = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
+    measures = {m: np.asarray(v).reshape(n, k) for m, v in measures.items()}
+    ok, bad = np.asarray(ok, bool).reshape(n, k), traj.diverged.reshape(n, k)
+    agg, folded = _fold(costs, measures, r["aggregate"])
+    require = r.get("require", 1.0)
+    success = ok.mean(axis=1) >= require - 1e-12
+    failed = bad.any(axis=1)
+    m_more = r.get("confirm", 0)
+    cand = np.flatnonzero(success) if m_more else np.zeros(0, int)
+    if cand.size:                                   # run the candidates from M more starts
+        t2 = _batch_rollout(ev, [genomes[i] for i in cand], progress, m_more,
+                            confirm_rng(r["seed"], generation))
+        c2, m2, ok2 = task.score(t2, progress)
+        c2 = np.where(np.isfinite(c2), c2, WORST).reshape(len(cand), m_more)
+        both = {m: np.concatenate([measures[m][cand], np.asarray(v).reshape(len(cand), m_more)], axis=1)
+                for m, v in m2.items()}
+        a2, f2 = _fold(np.concatenate([costs[cand], c2], axis=1), both, r["aggregate"])
+        agg[cand] = a2
+        for m in folded:
+            folded[m][cand] = f2[m]
+        ok_all = np.concatenate([ok[cand], np.asarray(ok2, bool).reshape(len(cand), m_more)], axis=1)
+        success[cand] = ok_all.mean(axis=1) >= require - 1e-12
+        failed[cand] |= t2.diverged.reshape(len(cand), m_more).any(axis=1)
+    extras = fam.extras(traj)                                   # per episode; a genome's first start
+    extras = None if extras is None else extras[::k]
+    return Evaluation(agg, success, failed, folded, extras)
+
+
+def _batch_rollout(ev, genomes, progress, k, rng):
+    """Genomes × K starts drawn from ``rng`` (one batched rollout, controller-major)."""
+    task, fam = ev.task, ev.family
+    q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, rng, sizes_of(ev.robust))
+    return robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
                           n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
                           actuation=ev.actuation, default_tau=fam.default_tau,
                           record_senses=fam.needs_senses, threads=ev.threads)
-    costs, measures, ok = task.score(traj, progress)
-    agg = aggregate(costs, k, r["aggregate"])
-    if r["aggregate"] == "mean":
-        folded = {m: np.asarray(v, float).reshape(n, k).mean(axis=1) for m, v in measures.items()}
-    else:
-        c = np.where(np.isfinite(costs), costs, WORST).reshape(n, k)
-        pick = np.arange(n) * k + np.argmax(c, axis=1)          # first of equal worsts
-        folded = {m: np.asarray(v)[pick] for m, v in measures.items()}
-    extras = fam.extras(traj)                                   # per episode; a genome's first start
-    extras = None if extras is None else extras[::k]
-    return Evaluation(agg, np.asarray(ok, bool).reshape(n, k).all(axis=1),
-                      traj.diverged.reshape(n, k).any(axis=1), folded, extras)
+
+
+def _fold(costs, measures: dict, how: str):
+    """Per controller (rows of costs [N, S]): the aggregate cost and the measures that give it
+    (the mean over starts, or the worst start's)."""
+    n = len(costs)
+    if how == "mean":
+        return costs.mean(axis=1), {m: np.asarray(v, float).mean(axis=1) for m, v in measures.items()}
+    if how == "worst":
+        pick = np.argmax(costs, axis=1)                         # first of equal worsts
+    else:                                                       # qNN: that percentile's start
+        pick = np.argsort(costs, axis=1, kind="stable")[:, _order_index(costs.shape[1], how)]
+    return costs[np.arange(n), pick], {m: np.asarray(v)[np.arange(n), pick] for m, v in measures.items()}
 
 
 # ---------------------------------------------------------------- gpmotion run options
@@ -257,8 +326,15 @@ def add_run_arguments(p) -> None:
                    help="score every controller from K randomly perturbed starts (joint angles, "
                         "position, orientation, linear and angular momentum), redrawn every "
                         "generation from the run's seed (default: off, the nominal start)")
-    g.add_argument("--robust-aggregate", choices=AGGREGATES,
-                   help="fold the K costs into one: mean (default) or worst")
+    g.add_argument("--robust-aggregate", metavar="mean|worst|qNN",
+                   help="fold the K costs into one: mean (default), worst, or qNN, the NN-th "
+                        "percentile start's (q80: what 80 %% of the starts do at least as well as)")
+    g.add_argument("--robust-confirm", type=int, metavar="M",
+                   help="a controller that succeeds from its K starts is run from M more, and "
+                        "scored and judged over all K + M (default 0: off)")
+    g.add_argument("--robust-require", type=float, metavar="F",
+                   help="success = succeeds from at least this fraction of its starts "
+                        "(default 1: every one)")
     g.add_argument("--perturb", metavar="PART=SIGMA,...",
                    help="perturbation sizes (σ) overriding the figure's defaults: "
                         + ", ".join(SIZE_KEYS) + " (rad, m, rad, m/s, rad/s); "
@@ -274,6 +350,9 @@ def run_setting(args) -> dict:
         out["starts"] = args.robust_starts
     if getattr(args, "robust_aggregate", None) is not None:
         out["aggregate"] = args.robust_aggregate
+    for key in ("confirm", "require"):
+        if getattr(args, f"robust_{key}", None) is not None:
+            out[key] = getattr(args, f"robust_{key}")
     text = getattr(args, "perturb", None)
     if text is not None:
         for part in text.split(","):
@@ -284,5 +363,6 @@ def run_setting(args) -> dict:
                                   f"{', '.join(SIZE_KEYS)}, got {part.strip()!r}")
             out[k] = float(validate_number(f"--perturb {k}", v.strip(), lo=0, hi=10.0))
     if out and "starts" not in out:
-        raise ConfigError("--robust-aggregate / --perturb need --robust-starts K")
+        raise ConfigError("--robust-aggregate / --robust-confirm / --robust-require / --perturb "
+                          "need --robust-starts K")
     return out

@@ -322,15 +322,17 @@ def _call_kind(node: Node, kinds: dict[str, int], depth: int) -> int:
 # -------------------------------------------------------------------- binding
 
 def bind(script: Script, figure) -> None:
-    """Check the script against a figure: quoted site names exist (ScriptError at line:col)."""
+    """Check the script against a figure: quoted site / contact names exist (ScriptError at line:col)."""
     def walk(node):
         if not isinstance(node, Node):
             return
         if node.op == "call" and node.value in FUNCTIONS and "name" in FUNCTIONS[node.value].args:
+            what = FUNCTIONS[node.value].names
+            known = figure.site_names if what == "site" else figure.contact_names
             for a in node.args:
-                if isinstance(a, str) and a not in figure.site_names:
-                    raise ScriptError(node.line, node.col, f"{figure.name} has no site {a!r} "
-                                      f"(sites: {', '.join(figure.site_names) or 'none'})")
+                if isinstance(a, str) and a not in known:
+                    raise ScriptError(node.line, node.col, f"{figure.name} has no {what} {a!r} "
+                                      f"({what}s: {', '.join(known) or 'none'})")
         for a in node.args:
             walk(a)
     for s in script.statements:

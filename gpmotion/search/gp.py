@@ -377,6 +377,16 @@ class GPSearch(GenerationalSearch):
 
     # -- results ---------------------------------------------------------------
     @property
+    def best(self):
+        """Once ``stop_on_success`` fired: the solver it kept, not a cheaper non-solver the
+        final scoring saw earlier (with robust starts: one whose starts were easy)."""
+        return self.hall_of_fame if self.stopped else super().best
+
+    @property
+    def best_cost(self) -> float:
+        return float(self.hof_cost) if self.stopped else super().best_cost
+
+    @property
     def hall_of_fame(self):
         """Hall-of-fame genome (token lists), or None before the first ``tell``."""
         return None if self._best_key is None else [list(t) for t in self._best_key]
