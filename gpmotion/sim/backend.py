@@ -5,14 +5,11 @@ A backend is a module (:mod:`gpmotion.sim.backend_planar`,
 
 * sizes: ``NAME``, ``CONTACT_WIDTH`` (friction state per
   contact point), ``COM_WIDTH`` (the com channel), ``JIT`` (the flags of the
-  episode loop), ``STEP`` (those of observe/advance);
+  episode loop), ``STEP`` (observe/advance: inlined);
 * kernel steps (numba), called by the one episode loop of
   :mod:`gpmotion.sim.episode` through the generic functions below;
-  ``observe`` and ``advance`` (the physics) are compiled once per backend
-  with the ``STEP`` flags and cached on disk, so a new controller's kernel
-  compiles its loop, not the physics again (inlined into every loop, the
-  herman kernel compiled for > 17 min cold where it now takes 6.4 min, at
-  load 9 on 2 cores); ``workspace`` and ``save_contact`` are inlined:
+  every step is inlined into the loop (``observe``/``advance`` as their
+  own Python function's IR: see the note above ``_observe``):
 
   - ``workspace(M, S, nv, contact) -> Work``: per-episode scratch (a NamedTuple),
     friction anchors taken from ``contact``, the scene's object (if any) at its start;
@@ -53,25 +50,31 @@ def _kernels(M):
     return BACKENDS[M.instance_class.BACKEND]
 
 
+def _of(M):
+    """The backend of a Model instance (pure Python: numba's JIT disabled)."""
+    return BACKENDS[type(M).BACKEND]
+
+
 # ---- generic kernel steps: each resolves to the Model's backend at compile time
+# (numba) or at the call (JIT disabled, as the no-JIT tests run)
 def workspace(M, S, nv, contact):
-    raise NotImplementedError("numba only")
+    return _of(M).workspace(M, S, nv, contact)
 
 
-def observe(M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm):
-    raise NotImplementedError("numba only")
+def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
+    return _of(M).observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm)
 
 
-def advance(M, S, q, qd, targets, taus, actuation, dt, limit, work, energy):
-    raise NotImplementedError("numba only")
+def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
+    return _of(M).advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy)
 
 
 def save_contact(M, work, contact):
-    raise NotImplementedError("numba only")
+    return _of(M).save_contact(work, contact)
 
 
 def store_object(M, work, row):
-    raise NotImplementedError("numba only")
+    return _of(M).store_object(work, row)
 
 
 @overload(workspace, inline="always")
@@ -80,18 +83,19 @@ def _workspace(M, S, nv, contact):
     return lambda M, S, nv, contact: f(M, S, nv, contact)
 
 
+# observe/advance: the backend's own Python function, its IR inlined into the loop
+# as a direct call would be.  Through a jitted wrapper (a lambda calling the
+# dispatcher) numba deep-copies the whole physics IR once more per level: the
+# herman kernel then compiled for > 17 min; as separate calls (not inlined) the
+# loop passed ~60 arrays per call and the lamp ran 3.5x slower.
 @overload(observe, inline="always")
-def _observe(M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm):
-    f = _kernels(M).observe
-    return lambda M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm: f(
-        M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm)
+def _observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
+    return _kernels(M).observe.py_func
 
 
 @overload(advance, inline="always")
-def _advance(M, S, q, qd, targets, taus, actuation, dt, limit, work, energy):
-    f = _kernels(M).advance
-    return lambda M, S, q, qd, targets, taus, actuation, dt, limit, work, energy: f(
-        M, S, q, qd, targets, taus, actuation, dt, limit, work, energy)
+def _advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
+    return _kernels(M).advance.py_func
 
 
 @overload(save_contact, inline="always")

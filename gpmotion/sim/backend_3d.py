@@ -23,10 +23,8 @@ UP = 2                     # the vertical axis of a point (x, y, z)
 # flags of the episode loop the steps are inlined into: FMA contraction only
 # (no other fast-math: the NaN checks stay), ~10 % on the humanoid
 JIT = dict(cache=True, error_model="numpy", boundscheck=False, fastmath={"contract"})
-# observe/advance: compiled once per backend (cached on disk) and called by every
-# controller's loop, so a new controller compiles its loop, not the physics again
-STEP = JIT
 _INLINE = dict(cache=True, error_model="numpy", boundscheck=False, inline="always")
+STEP = _INLINE             # observe/advance: inlined into the episode loop (backend.py)
 
 
 class Work(NamedTuple):

@@ -26,10 +26,8 @@ UP = 1                     # the vertical axis of a point (x, z)
 # flags of the episode loop the steps are inlined into (no FMA contraction:
 # it measured no gain here, and results stay those of the first kernels)
 JIT = dict(cache=True, error_model="numpy", boundscheck=False)
-# observe/advance: compiled once per backend (cached on disk) and called by every
-# controller's loop, so a new controller compiles its loop, not the physics again
-STEP = JIT
 _INLINE = dict(JIT, inline="always")
+STEP = _INLINE             # observe/advance: inlined into the episode loop (backend.py)
 
 
 class Work(NamedTuple):

@@ -128,7 +128,7 @@ _RUNNERS = {name: _compiled(name, b.JIT) for name, b in BACKENDS.items()}
 
 
 def episode(M, S, goal, st, e, start, prog, out):
-    raise NotImplementedError("numba only")
+    return _RUNNERS[type(M).BACKEND](M, S, goal, st, e, start, prog, out)   # JIT disabled
 
 
 @overload(episode)
