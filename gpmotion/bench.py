@@ -321,7 +321,7 @@ def run_bench(figure: str = "lamp", seconds: float | None = None, episodes: int 
     t0 = time.perf_counter()
     tr = run(1)                                    # compiles, or loads the cache
     first_call_s = time.perf_counter() - t0
-    steps = episodes * (tr.q.shape[1] - 1) * tr.record_every
+    steps = episodes * n_steps                     # advances per episode (frames may round up)
     t1 = _best_time(lambda: run(1), repeats)
     tn = _best_time(lambda: run(threads), repeats)
     touching = tr.contact_force.sum(axis=-1) > 0
