@@ -50,31 +50,26 @@ def _kernels(M):
     return BACKENDS[M.instance_class.BACKEND]
 
 
-def _of(M):
-    """The backend of a Model instance (pure Python: numba's JIT disabled)."""
-    return BACKENDS[type(M).BACKEND]
-
-
 # ---- generic kernel steps: each resolves to the Model's backend at compile time
 # (numba) or at the call (JIT disabled, as the no-JIT tests run)
 def workspace(M, S, nv, contact):
-    return _of(M).workspace(M, S, nv, contact)
+    return backend_of(M).workspace(M, S, nv, contact)
 
 
 def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
-    return _of(M).observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm)
+    return backend_of(M).observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm)
 
 
 def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
-    return _of(M).advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy)
+    return backend_of(M).advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy)
 
 
 def save_contact(M, work, contact):
-    return _of(M).save_contact(work, contact)
+    return backend_of(M).save_contact(work, contact)
 
 
 def store_object(M, work, row):
-    return _of(M).store_object(work, row)
+    return backend_of(M).store_object(work, row)
 
 
 @overload(workspace, inline="always")
