@@ -582,7 +582,7 @@ def test_a_planar_goal_is_a_3d_goal_with_y_zero():
 
 @pytest.mark.parametrize("where, value, message", [
     ("sites", "yes", "'sense' must be true or false"),
-    ("contacts", True, "only sites take 'sense'"),
+    ("contacts", True, "only sites of 3-D figures take 'sense'"),
 ])
 def test_site_sense_flag_is_checked(where, value, message):
     spec = humanoid3d()
