@@ -32,8 +32,6 @@ module, add it to ``BACKENDS``, give its Model class ``BACKEND = name``.
 """
 from __future__ import annotations
 
-from numba.extending import overload
-
 from . import backend_3d, backend_planar
 
 BACKENDS = {b.NAME: b for b in (backend_planar, backend_3d)}
@@ -45,13 +43,12 @@ def backend_of(model):
     return BACKENDS[model.BACKEND]
 
 
-def _kernels(M):
-    """The backend of a Model's numba type (a NamedTuple type of its class)."""
-    return BACKENDS[M.instance_class.BACKEND]
+# ---- generic kernel steps, for gpmotion.sim.episode imported as it is (JIT
+# disabled, as the no-JIT tests run): each dispatches on the Model's backend.
+# A compiled kernel imports its backend's own steps instead (gpmotion.sim.kernels).
+JIT: dict = {}
 
 
-# ---- generic kernel steps: each resolves to the Model's backend at compile time
-# (numba) or at the call (JIT disabled, as the no-JIT tests run)
 def workspace(M, S, nv, contact):
     return backend_of(M).workspace(M, S, nv, contact)
 
@@ -64,42 +61,13 @@ def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
     return backend_of(M).advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy)
 
 
-def save_contact(M, work, contact):
-    return backend_of(M).save_contact(work, contact)
+def save_contact(work, contact):
+    return _backend_of_work(work).save_contact(work, contact)
 
 
-def store_object(M, work, row):
-    return backend_of(M).store_object(work, row)
+def store_object(work, row):
+    return _backend_of_work(work).store_object(work, row)
 
 
-@overload(workspace, inline="always")
-def _workspace(M, S, nv, contact):
-    f = _kernels(M).workspace
-    return lambda M, S, nv, contact: f(M, S, nv, contact)
-
-
-# observe/advance: the backend's own Python function, its IR inlined into the loop
-# as a direct call would be.  Through a jitted wrapper (a lambda calling the
-# dispatcher) numba deep-copies the whole physics IR once more per level: the
-# herman kernel then compiled for > 17 min; as separate calls (not inlined) the
-# loop passed ~60 arrays per call and the lamp ran 3.5x slower.
-@overload(observe, inline="always")
-def _observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
-    return _kernels(M).observe.py_func
-
-
-@overload(advance, inline="always")
-def _advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):
-    return _kernels(M).advance.py_func
-
-
-@overload(save_contact, inline="always")
-def _save_contact(M, work, contact):
-    f = _kernels(M).save_contact
-    return lambda M, work, contact: f(work, contact)
-
-
-@overload(store_object, inline="always")
-def _store_object(M, work, row):
-    f = _kernels(M).store_object
-    return lambda M, work, row: f(work, row)
+def _backend_of_work(work):
+    return next(b for b in BACKENDS.values() if isinstance(work, b.Work))

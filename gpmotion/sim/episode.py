@@ -17,14 +17,13 @@ import types
 
 import numpy as np
 from numba import njit, prange
-from numba.extending import overload
 
-from gpmotion.sim.backend import BACKENDS, advance, observe, save_contact, store_object, workspace
+from gpmotion.sim.backend import JIT, advance, observe, save_contact, store_object, workspace  # backend
 from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
 
 
 def run_episode(M, S, goal, st, e, start, prog, out):
-    """Simulate episode ``e`` of the batch (compiled per backend: :data:`_RUNNERS`)."""
+    """Simulate episode ``e`` of the batch."""
     n_steps = start.n_steps[e]
     q = start.q0[e].copy()
     qd = start.qd0[e].copy()
@@ -85,7 +84,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             if record_senses:
                 out_senses[frame, :] = senses
             if has_obj:
-                store_object(M, work, out_obj[frame])
+                store_object(work, out_obj[frame])
             max_cf[:] = 0.0
             max_pole = 0.0
             max_impact = 0.0
@@ -99,7 +98,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             status[0] = 1
             status[1] = step
             break
-    save_contact(M, work, contact)
+    save_contact(work, contact)
     # an episode that ended early (diverged, or shorter) holds its last frame
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
@@ -116,29 +115,11 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             out_obj[f, :] = out_obj[frame - 1, :]
 
 
-def _compiled(name, flags):
-    """``run_episode`` compiled with a backend's flags, as a copy named for the
-    backend (numba names its on-disk cache entries after the function)."""
-    f = types.FunctionType(run_episode.__code__, run_episode.__globals__, f"run_episode_{name}")
-    f.__qualname__ = f.__name__
-    return njit(**flags)(f)
-
-
-_RUNNERS = {name: _compiled(name, b.JIT) for name, b in BACKENDS.items()}
-
-
-def episode(M, S, goal, st, e, start, prog, out):
-    return _RUNNERS[type(M).BACKEND](M, S, goal, st, e, start, prog, out)   # JIT disabled
-
-
-@overload(episode)
-def _episode(M, S, goal, st, e, start, prog, out):
-    f = _RUNNERS[M.instance_class.BACKEND]
-    return lambda M, S, goal, st, e, start, prog, out: f(M, S, goal, st, e, start, prog, out)
+_run_episode = njit(**JIT)(run_episode)
 
 
 @njit(cache=True, parallel=True)
 def rollout_batch(M, S, goal, st, start, prog, out):
     """Every episode of the batch, in parallel (numba threads)."""
     for e in prange(start.q0.shape[0]):
-        episode(M, S, goal, st, e, start, prog, out)
+        _run_episode(M, S, goal, st, e, start, prog, out)

@@ -14,17 +14,23 @@ from pathlib import Path
 import numba
 
 from .. import cache
+from .backend import BACKENDS
 
 EPISODE = Path(__file__).with_name("episode.py")
 MARK = "# controller"
+BACKEND_MARK = "# backend"
 
 _KERNELS: dict = {}
 
 
-def episode_source(control_module: str) -> str:
-    """The episode module's source with the controller import replaced."""
+def episode_source(control_module: str, backend: str) -> str:
+    """The episode module's source with the backend and controller imports replaced."""
     path = str(Path(control_module).resolve())
     lines = EPISODE.read_text().splitlines(keepends=True)
+    [b] = [k for k, line in enumerate(lines) if line.rstrip().endswith(BACKEND_MARK)]
+    module = BACKENDS[backend].__name__
+    lines[b] = (f"from {module} import JIT, advance, observe, save_contact, store_object, "
+                f"workspace  {BACKEND_MARK}\n")
     [i] = [k for k, line in enumerate(lines) if line.rstrip().endswith(MARK)]
     lines[i] = ("from gpmotion.cache import import_file\n"
                 f"_controller = import_file({path!r})\n"
@@ -33,9 +39,9 @@ def episode_source(control_module: str) -> str:
     return head + "".join(lines)
 
 
-def kernel_key(control_module: str) -> str:
-    """Hash of everything the kernel for ``control_module`` compiles."""
-    source = episode_source(control_module)
+def kernel_key(control_module: str, backend: str) -> str:
+    """Hash of everything the kernel for ``control_module`` on ``backend`` compiles."""
+    source = episode_source(control_module, backend)
     ctrl = Path(control_module)
     modules = cache.package_modules(source)
     modules.update(cache.package_modules(ctrl.read_text(), _package_of(ctrl)))
@@ -54,12 +60,13 @@ def _package_of(path: Path) -> str:
     return ".".join(("gpmotion",) + path.parent.relative_to(root).parts)
 
 
-def kernel_for(control_module: str):
-    """The rollout kernel module for a controller module (memoized per file
-    version: hashing the sources on every call costs more than a small rollout)."""
+def kernel_for(control_module: str, backend: str):
+    """The rollout kernel module for a controller module on a backend (memoized per
+    file version: hashing the sources on every call costs more than a small rollout)."""
     st = Path(control_module).stat()
-    memo = (control_module, st.st_mtime_ns, st.st_size)
+    memo = (control_module, backend, st.st_mtime_ns, st.st_size)
     if memo not in _KERNELS:
-        path = cache.write_module(f"rollout_{kernel_key(control_module)}", episode_source(control_module))
+        path = cache.write_module(f"rollout_{kernel_key(control_module, backend)}",
+                                  episode_source(control_module, backend))
         _KERNELS[memo] = cache.import_file(path)
     return _KERNELS[memo]

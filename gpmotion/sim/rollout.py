@@ -199,7 +199,7 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
                       np.array(controller.cf, dtype=np.float64),
                       np.zeros((E, max(1, controller.cstate_size))))
     out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses, has_obj)
-    kernel = kernel_for(controller.module)
+    kernel = kernel_for(controller.module, backend.NAME)
     old_threads = numba.get_num_threads()
     if threads:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
