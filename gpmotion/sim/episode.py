@@ -18,6 +18,7 @@ import types
 import numpy as np
 from numba import njit, prange
 
+from gpmotion.sim.borrow import borrowed
 from gpmotion.sim.backend import JIT, advance, observe, save_contact, store_object, workspace  # backend
 from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
 
@@ -25,6 +26,7 @@ from gpmotion.controllers.schedule_kernel import control as ctrl_control, init a
 def run_episode(M, S, goal, st, e, start, prog, out):
     """Simulate episode ``e`` of the batch."""
     n_steps = start.n_steps[e]
+    M, S = borrowed(M), borrowed(S)   # the model and scene outlive the call: uncounted
     q = start.q0[e].copy()
     qd = start.qd0[e].copy()
     contact = start.contact[e]
@@ -40,7 +42,8 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
     neutral = M.neutral
-    work = workspace(M, S, qd.shape[0], contact)
+    owned = workspace(M, S, qd.shape[0], contact)
+    work = borrowed(owned)         # uncounted views (gpmotion.sim.borrow); owned lives to the end
     cforce = np.zeros(nc)
     com = np.zeros(out_com.shape[1])
     senses_all = np.zeros(ns + 1)  # + a scratch entry for the body slots a layout leaves out
@@ -98,7 +101,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             status[0] = 1
             status[1] = step
             break
-    save_contact(work, contact)
+    save_contact(owned, contact)
     # an episode that ended early (diverged, or shorter) holds its last frame
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
