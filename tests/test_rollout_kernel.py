@@ -1,6 +1,7 @@
-"""The rollout kernel is the real episode module with one line replaced, under a
-key that hashes every gpmotion module it compiles; the harness reaches the
-physics through named backends."""
+"""The rollout kernel is the real episode module with two import lines replaced
+(backend and controller), under a key that hashes every gpmotion module it
+compiles; the harness reaches the physics through named backends."""
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,35 +14,43 @@ from gpmotion.sim import backend, episode, kernels
 from gpmotion.sim.rollout import simulate
 
 
-def test_generated_kernel_is_the_episode_module_but_for_the_controller_import():
-    src = kernels.episode_source(schedule.KERNEL).splitlines()
+@pytest.mark.parametrize("name", sorted(backend.BACKENDS))
+def test_generated_kernel_is_the_episode_module_but_for_two_imports(name):
+    src = kernels.episode_source(schedule.KERNEL, name).splitlines()
     real = Path(episode.__file__).read_text().splitlines()
     changed = [line for line in real if line not in src]
-    assert changed == [l for l in real if l.rstrip().endswith(kernels.MARK)]     # just that line
+    marked = [l for l in real if l.rstrip().endswith((kernels.MARK, kernels.BACKEND_MARK))]
+    assert changed == marked and len(marked) == 2                               # just those lines
     assert f"_controller = import_file({str(Path(schedule.KERNEL).resolve())!r})" in src
+    assert any(l.startswith(f"from {backend.BACKENDS[name].__name__} import ") for l in src)
+
+
+def test_kernels_differ_per_backend():
+    keys = {kernels.kernel_key(schedule.KERNEL, name) for name in backend.BACKENDS}
+    assert len(keys) == len(backend.BACKENDS)
 
 
 def test_kernel_key_covers_helpers_imported_on_the_way(monkeypatch):
     """actuation.py is imported by planar.py and spatial3d.py, not by the episode
     module: editing it must still give another kernel (a stale one would run old physics)."""
-    names = cache.package_modules(kernels.episode_source(schedule.KERNEL))
+    names = cache.package_modules(kernels.episode_source(schedule.KERNEL, "planar"))
     for helper in ("gpmotion.sim.actuation", "gpmotion.sim.planar", "gpmotion.sim.spatial3d",
                    "gpmotion.sim.senses", "gpmotion.sim.backend_planar", "gpmotion.model"):
         assert helper in names
-    before = kernels.kernel_key(schedule.KERNEL)
+    before = kernels.kernel_key(schedule.KERNEL, "planar")
     actuation = names["gpmotion.sim.actuation"]
     real = cache.read_source
     monkeypatch.setattr(cache, "read_source",
                         lambda p: real(p) + (b"\n# edited\n" if Path(p) == actuation else b""))
-    assert kernels.kernel_key(schedule.KERNEL) != before
+    assert kernels.kernel_key(schedule.KERNEL, "planar") != before
 
 
 def test_kernel_key_covers_the_controller_module(tmp_path):
     ctrl = tmp_path / "ctrl.py"
     ctrl.write_text(Path(schedule.KERNEL).read_text())
-    before = kernels.kernel_key(str(ctrl))
+    before = kernels.kernel_key(str(ctrl), "planar")
     ctrl.write_text(ctrl.read_text() + "\n# edited\n")
-    assert kernels.kernel_key(str(ctrl)) != before
+    assert kernels.kernel_key(str(ctrl), "planar") != before
 
 
 def test_package_modules_resolves_relative_imports_and_skips_attributes():
@@ -66,3 +75,33 @@ def test_trajectory_geometry_comes_from_the_backend():
     assert tr.backend is backend.backend_planar and not tr.is3d
     np.testing.assert_array_equal(tr.base(), tr.poses()[..., m.base_link, :])
     assert tr.segments().shape == tr.q.shape[:2] + (len(m.seg_link), 2, 2)
+
+
+@pytest.mark.parametrize("name", ["lamp", "herman"])
+def test_borrowed_views_leave_no_reference_behind(name):
+    """The episode loop reads the model, scene and workspace through uncounted views
+    (gpmotion.sim.borrow): a rollout must neither leak nor drop a reference to the
+    model's arrays (a dropped one would free them under the caller)."""
+    fig = load_figure(name)
+    simulate(fig, 0.01)                                   # compile and warm up
+    arrays = [a for a in fig.model if isinstance(a, np.ndarray)]
+    before = [sys.getrefcount(a) for a in arrays]
+    for _ in range(3):
+        simulate(fig, 0.01)
+    assert [sys.getrefcount(a) for a in arrays] == before
+
+
+def test_borrowed_is_the_same_arrays():
+    from numba import njit
+    from gpmotion.sim.borrow import borrowed
+
+    @njit
+    def write_through(w):
+        b = borrowed(w)
+        b[0][0] = 7.0
+        b[1][1] = 3
+        return b[0].sum() + b[2]
+
+    w = (np.zeros(3), np.zeros(2, dtype=np.int64), 1.5)
+    assert write_through(w) == 8.5
+    assert w[0][0] == 7.0 and w[1][1] == 3

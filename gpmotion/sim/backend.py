@@ -6,10 +6,9 @@ A backend is a module (:mod:`gpmotion.sim.backend_planar`,
 * sizes: ``NAME``, ``CONTACT_WIDTH`` (friction state per
   contact point), ``COM_WIDTH`` (the com channel), ``JIT`` (the flags of the
   episode loop), ``STEP`` (observe/advance: inlined);
-* kernel steps (numba), called by the one episode loop of
-  :mod:`gpmotion.sim.episode` through the generic functions below;
-  every step is inlined into the loop (``observe``/``advance`` as their
-  own Python function's IR: see the note above ``_observe``):
+* kernel steps (numba, ``inline="always"``), imported by name into the one
+  episode loop of :mod:`gpmotion.sim.episode` by :mod:`gpmotion.sim.kernels`
+  (the generic functions below serve the loop imported as it is, JIT disabled):
 
   - ``workspace(M, S, nv, contact) -> Work``: per-episode scratch (a NamedTuple),
     friction anchors taken from ``contact``, the scene's object (if any) at its start;

@@ -24,7 +24,7 @@ UP = 2                     # the vertical axis of a point (x, y, z)
 # (no other fast-math: the NaN checks stay), ~10 % on the humanoid
 JIT = dict(cache=True, error_model="numpy", boundscheck=False, fastmath={"contract"})
 _INLINE = dict(cache=True, error_model="numpy", boundscheck=False, inline="always")
-STEP = _INLINE             # observe/advance: inlined into the episode loop (backend.py)
+STEP = _INLINE             # observe/advance: inlined into the episode loop (kernels.py)
 
 
 class Work(NamedTuple):

@@ -27,7 +27,7 @@ UP = 1                     # the vertical axis of a point (x, z)
 # it measured no gain here, and results stay those of the first kernels)
 JIT = dict(cache=True, error_model="numpy", boundscheck=False)
 _INLINE = dict(JIT, inline="always")
-STEP = _INLINE             # observe/advance: inlined into the episode loop (backend.py)
+STEP = _INLINE             # observe/advance: inlined into the episode loop (kernels.py)
 
 
 class Work(NamedTuple):

@@ -5,16 +5,16 @@ senses), the controller sets the joint targets, a frame is recorded every
 ``every`` steps (event channels hold the max, energy the sum, since the
 previous frame), and the backend advances the state by dt.
 
-A rollout kernel for a controller kernel module is a copy of this file with
-one line replaced, the controller import marked ``# controller`` below
-(:mod:`gpmotion.sim.kernels` writes the copy to the cache folder, so numba
-caches it on disk and inlines the controller's ``control`` into the loop: no
-Python call per step).  Imported as it is, this module runs the ``schedule``
-controller.  The controller contract is in :mod:`gpmotion.controllers`; the
-arguments are the named structures of :mod:`gpmotion.sim.kernel_io`.
+A rollout kernel for a backend and a controller kernel module is a copy of
+this file with two lines replaced, the imports marked ``# backend`` and
+``# controller`` below (:mod:`gpmotion.sim.kernels` writes the copy to the
+cache folder, so numba caches it on disk and inlines the backend's steps and
+the controller's ``control`` into the loop: no call per step).  Imported as it
+is, with JIT disabled, the steps dispatch in Python on the model's backend and
+the ``schedule`` controller runs.  The controller contract is in
+:mod:`gpmotion.controllers`; the arguments are the named structures of
+:mod:`gpmotion.sim.kernel_io`.
 """
-import types
-
 import numpy as np
 from numba import njit, prange
 

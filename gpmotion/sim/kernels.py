@@ -1,11 +1,18 @@
-"""Rollout kernels: the episode module with one controller's import substituted.
+"""Rollout kernels: the episode module with its backend and controller imports substituted.
 
-The kernel for a controller kernel module is :mod:`gpmotion.sim.episode`
-with its ``# controller`` import line replaced by an import of that module,
-written to the cache folder under a key that hashes the generated source,
-every gpmotion module it imports (transitively: :func:`gpmotion.cache.package_modules`),
-the controller module and numba's version — so an edit to any helper the
-kernel compiles gives a new kernel, never a stale one.
+The kernel for a backend and a controller kernel module is
+:mod:`gpmotion.sim.episode` with its ``# backend`` import line replaced by an
+import of that backend's steps and its ``# controller`` line by an import of
+that module, written to the cache folder under a key that hashes the
+generated source, every gpmotion module it imports (transitively:
+:func:`gpmotion.cache.package_modules`), the controller module and numba's
+version — so an edit to any helper the kernel compiles gives a new kernel,
+never a stale one.
+
+The backend is a plain import, not a generic function resolved by numba at
+compile time: numba then inlines the steps as it inlines any ``inline="always"``
+function.  Resolved through ``@overload`` (the first rollout rewrite) the lamp
+kernel compiled 4x longer (72 s against 314 s, cold) for the same machine code.
 """
 from __future__ import annotations
 
