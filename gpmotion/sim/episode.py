@@ -124,5 +124,7 @@ _run_episode = njit(**JIT)(run_episode)
 @njit(cache=True, parallel=True)
 def rollout_batch(M, S, goal, st, start, prog, out):
     """Every episode of the batch, in parallel (numba threads)."""
-    for e in prange(start.q0.shape[0]):
-        _run_episode(M, S, goal, st, e, start, prog, out)
+    for i in prange(start.q0.shape[0]):
+        # int64: numba types a prange index int64 when it types this function and
+        # uint64 inside the parallel body, so a bare index compiled the episode twice
+        _run_episode(M, S, goal, st, np.int64(i), start, prog, out)
