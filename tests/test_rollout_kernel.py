@@ -105,3 +105,18 @@ def test_borrowed_is_the_same_arrays():
     w = (np.zeros(3), np.zeros(2, dtype=np.int64), 1.5)
     assert write_through(w) == 8.5
     assert w[0][0] == 7.0 and w[1][1] == 3
+
+
+def test_every_way_of_giving_a_start_state_uses_one_kernel_signature():
+    """A second numba signature is a second compile of the whole episode (a minute
+    for herman): a start row, a batch, a Fortran-ordered batch and none all give
+    C-ordered copies."""
+    from gpmotion.model import make_scene
+    from gpmotion.sim.rollout import rollout
+    fig = load_figure("lamp")
+    ctrl = schedule.sines(np.tile(fig.model.neutral, (3, 1)), 0.0, 1.0, 0.0)     # 3 episodes
+    q = np.tile(fig.q_default, (3, 1))
+    for q0 in (None, fig.q_default, q, np.asfortranarray(q)):
+        rollout(fig, make_scene(), ctrl, n_steps=5, q0=q0, qd0=None if q0 is None else np.zeros_like(q0))
+    kernel = kernels.kernel_for(schedule.KERNEL, "planar")
+    assert len(kernel.rollout_batch.signatures) == 1

@@ -142,7 +142,9 @@ def _batch_state(x, n, nq, default, what):
                          f"{'coordinate' if what == 'q0' else 'dof'}), got {x.shape[-1]}")
     if not np.all(np.isfinite(x)):
         raise ValueError(f"{what} must be finite")
-    return np.array(np.broadcast_to(x, (n, nq)))   # a writable copy: one kernel signature
+    # a writable C-ordered copy: one kernel signature (a broadcast row copied in
+    # numpy's "K" order came out Fortran-ordered, and compiled the kernel again)
+    return np.array(np.broadcast_to(x, (n, nq)), order="C")
 
 
 def _contact_state(x, n, nc, k):
@@ -195,8 +197,8 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     start = Start(steps, q0, qd0, _contact_state(contact0, E, nc, backend.CONTACT_WIDTH))
     settings = Settings(float(dt), int(record_every), ACTUATION[actuation], float(default_tau),
                         DIVERGE_LIMIT, bool(record_senses))
-    program = Program(np.array(controller.ci, dtype=np.int64),
-                      np.array(controller.cf, dtype=np.float64),
+    program = Program(np.array(controller.ci, dtype=np.int64, order="C"),
+                      np.array(controller.cf, dtype=np.float64, order="C"),
                       np.zeros((E, max(1, controller.cstate_size))))
     out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses, has_obj)
     kernel = kernel_for(controller.module, backend.NAME)
