@@ -41,7 +41,7 @@ def hypot_api(a, b):
 '''
 
 
-def test_check_primitive_of_a_plugin(tmp_path, forget_plugins):
+def test_check_primitive_of_a_plugin(tmp_path):
     with pytest.raises(ValueError, match=r"unknown primitive 'hypot_api'.*load_plugins"):
         gpmotion.check_primitive("hypot_api")
     (tmp_path / "hyp.py").write_text(PLUGIN)

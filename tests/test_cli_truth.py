@@ -150,7 +150,7 @@ def hypot_t(a, b):
 '''
 
 
-def test_check_only_plugins_checks_only_the_users(tmp_path, capsys, forget_plugins):
+def test_check_only_plugins_checks_only_the_users(tmp_path, capsys):
     (tmp_path / "hyp.py").write_text(PLUGIN)
     assert main(["check", "--plugins", str(tmp_path), "--only-plugins"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
