@@ -1,6 +1,6 @@
 """Simulator speed of two checkouts of gpmotion, measured alternately in one run.
 
-    python benchmarks/rollout_ab.py BASE_DIR NEW_DIR [--rounds 3]
+    python benchmarks/rollout_ab.py BASE_DIR NEW_DIR [--rounds 3] [--only lamp_gp]
 
 runs ``gpmotion bench --json --no-gp --no-warm-start`` for the three
 workloads of issue 15 — lamp (sines), lamp driven by GP trees
@@ -35,14 +35,17 @@ def main(argv=None) -> int:
     p.add_argument("base")
     p.add_argument("new")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--only", choices=sorted(WORKLOADS), action="append",
+                   help="measure only this workload (repeatable; default: all three)")
     a = p.parse_args(argv)
+    workloads = {w: WORKLOADS[w] for w in (a.only or WORKLOADS)}
     sides = {"base": a.base, "new": a.new}
     for side in sides.values():                        # compile (untimed)
-        for args in WORKLOADS.values():
+        for args in workloads.values():
             bench(side, args + ["--quick"])
-    runs = {w: {s: [] for s in sides} for w in WORKLOADS}
+    runs = {w: {s: [] for s in sides} for w in workloads}
     for _ in range(a.rounds):
-        for w, args in WORKLOADS.items():
+        for w, args in workloads.items():
             for s, path in sides.items():
                 runs[w][s].append(bench(path, args)["steps_per_s"])
     result = {}
