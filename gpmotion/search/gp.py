@@ -113,6 +113,7 @@ class GPSearch(GenerationalSearch):
         self.best_generation, self._best_phase = -1, None
         self.generation_best: list[dict] = []
         self.history: list[dict] = []
+        self._height_memo: dict[tuple, int] = {}  # tree tokens -> depth (_heights)
         with self._own_random():
             self._set_population(self._initial_population())
 
@@ -293,15 +294,28 @@ class GPSearch(GenerationalSearch):
             self._best_key, self.hof_cost = self._keys[i], cost
             self.best_generation, self._best_phase = self.generation, phase
         sizes = [len(t) for ind in self._pop for t in ind]
+        heights = self._heights()
         row = {"generation": self.generation, "progress": self.progress,
                "evaluations": self.evaluations, "evaluated": n_evaluated,
                "min": cost, "median": float(np.median(c)), "mean": float(np.mean(c)),
                "max": float(np.max(c)),
                "best_so_far": self.hof_cost, "avg_tree_size": float(np.mean(sizes)),
-               "max_tree_depth": max(t.height for ind in self._pop for t in ind)}
+               "max_tree_depth": max(heights)}
         row["n_success"] = int(np.sum(evaluation.success))
         row["n_failed"] = int(np.sum(evaluation.failed))
         self.history.append(row)
+
+    def _heights(self) -> list[int]:
+        """Every tree's depth, remembered per token tuple across generations
+        (DEAP's ``height`` walks the tree in Python; most trees of a
+        generation were in the last one).  Only the current trees are kept."""
+        old, memo = self._height_memo, {}
+        for ind, key in zip(self._pop, self._keys):
+            for tree, tokens in zip(ind, key):
+                if tokens not in memo:
+                    memo[tokens] = old[tokens] if tokens in old else tree.height
+        self._height_memo = memo
+        return [memo[tokens] for key in self._keys for tokens in key]
 
     def _stop_if_solved(self, evaluation, costs) -> None:
         """``stop_on_success`` (Gritz & Hahn's termination criterion): once the
