@@ -144,14 +144,11 @@ def point_axis_distance(p, a, b):
 def through_torso(traj, points=("hand_r", "fingertip_r")):
     """Per episode: fraction of frames with a point inside the torso capsule plus
     the deepest penetration as a fraction of the radius (0 when never inside)."""
-    from gpmotion.sim import geometry3d
-
     fig = traj.figure
     i, r = _segment(fig, "torso")
-    m = fig.model
-    # the torso's axis only (one kinematics pass, not every link's capsule)
-    a, b = np.moveaxis(geometry3d.points_fast(m, traj.q, m.seg_link[[i, i]],
-                                              np.stack([m.seg_a[i], m.seg_b[i]])), -2, 0)
+    # the torso's axis: the capsules come from the sites' kinematics pass
+    seg = traj.segments()[..., i, :, :]
+    a, b = seg[..., 0, :], seg[..., 1, :]
     sites = traj.sites()
     worst = np.zeros(traj.q.shape[:2])
     for name in points:

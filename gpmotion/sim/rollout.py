@@ -114,19 +114,30 @@ class Trajectory:
     def _points(self, links, local) -> np.ndarray:
         return self.backend.points(self.figure.model, self.q, self.poses, links, local)
 
+    def _sites_and_segments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Sites and capsule end points from one kinematics pass over the frames
+        (a 3-D score asks for both, and the pass is most of their cost)."""
+        f, m = self.figure, self.figure.model
+        ns, nseg = len(f.site_link), len(m.seg_link)
+
+        def compute():
+            p = self._points(np.concatenate([f.site_link, m.seg_link, m.seg_link]),
+                             np.concatenate([np.reshape(f.site_pos, (ns, -1)), m.seg_a, m.seg_b]))
+            seg = p[..., ns:, :]
+            return (np.ascontiguousarray(p[..., :ns, :]),
+                    np.stack([seg[..., :nseg, :], seg[..., nseg:, :]], axis=-2))
+        return self._memo("_sites_segments", compute)
+
     def sites(self) -> np.ndarray:
         """World positions of the figure's sites [E, F, n_sites, 2 or 3]."""
-        f = self.figure
-        return self._memo("_sites", lambda: self._points(f.site_link, f.site_pos))
+        return self._sites_and_segments()[0]
 
     def site(self, name: str) -> np.ndarray:
         return self.sites()[..., self.figure.site_names.index(name), :]
 
     def segments(self) -> np.ndarray:
         """Capsule end points [E, F, n_seg, 2 (a/b), 2 or 3]."""
-        m = self.figure.model
-        return self._memo("_segments", lambda: np.stack(
-            [self._points(m.seg_link, m.seg_a), self._points(m.seg_link, m.seg_b)], axis=-2))
+        return self._sites_and_segments()[1]
 
     def sense(self, name: str) -> np.ndarray:
         if self.senses is None:
