@@ -25,14 +25,15 @@ def test_benchmark_runs_only_what_its_file_lacks_and_tables_the_file(bench, tmp_
     def fake(name, seed, tmp=None):
         calls.append((name, seed))
         return {"config": name, "seed": seed, "success": seed != 2, "wall_s": 70.0 + seed, "cpu_s": 100.0,
-                "main_cpu_s": 50.0 + seed, "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
+                "main_cpu_s": 50.0 + 25 * seed, "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
 
     monkeypatch.setattr(bench, "run_one", fake)
     assert bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)]) == 0
     assert calls == [("point", 0), ("touch_nose", 1), ("point", 1), ("touch_nose", 2), ("point", 2)]
     table = capsys.readouterr().out
-    assert "| touch_nose | 2 / 3 | 72 | 80 | 52 | 1.5–2.0 |" in table     # medians of 80, 71, 72; 51, 52
-    assert "| point | 2 / 3 | 71 | 72 | 51 | 2.0–2.0 |" in table
+    # wall: medians of 80, 71, 72; main-thread CPU 75, 100 (the old row has none): one over 90 s
+    assert "| touch_nose | 2 / 3 | 72 | 80 | 88 [75, 100] | 1 | 1.5–2.0 |" in table
+    assert "| point | 2 / 3 | 71 | 72 | 75 [50, 100] | 1 | 2.0–2.0 |" in table
     assert len(out.read_text().splitlines()) == 6
     calls.clear()
     bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)])

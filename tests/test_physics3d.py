@@ -596,6 +596,21 @@ def _gizmo():
     return gizmo()
 
 
+@pytest.mark.parametrize("make", [humanoid3d, chain3d])
+def test_trajectory_sites_and_segments_share_one_pass_and_equal_separate_ones(make):
+    """A Trajectory computes sites and capsule ends in one kinematics pass
+    (scores ask for both); each equals its own ``points_fast`` call exactly,
+    also for a figure without sites (chain3d)."""
+    from gpmotion.sim import geometry3d
+    fig, tr = rollout(make(), 0.05)
+    m = fig.model
+    assert np.array_equal(tr.sites(), geometry3d.points_fast(m, tr.q, fig.site_link, fig.site_pos))
+    seg = np.stack([geometry3d.points_fast(m, tr.q, m.seg_link, m.seg_a),
+                    geometry3d.points_fast(m, tr.q, m.seg_link, m.seg_b)], axis=-2)
+    assert np.array_equal(tr.segments(), seg)
+    assert tr.sites().shape == tr.q.shape[:2] + (len(fig.site_link), 3)
+
+
 @pytest.mark.parametrize("make", [humanoid3d, star3d, chain3d, _gizmo, lambda: "herman"])
 def test_compiled_points_match_the_numpy_kinematics(make):
     """``points_fast`` (numba, what a Trajectory's sites and segments use) is

@@ -122,7 +122,7 @@ class Trajectory:
 
         def compute():
             p = self._points(np.concatenate([f.site_link, m.seg_link, m.seg_link]),
-                             np.concatenate([np.reshape(f.site_pos, (ns, -1)), m.seg_a, m.seg_b]))
+                             np.concatenate([np.reshape(f.site_pos, (ns, m.seg_a.shape[-1])), m.seg_a, m.seg_b]))
             seg = p[..., ns:, :]
             return (np.ascontiguousarray(p[..., :ns, :]),
                     np.stack([seg[..., :nseg, :], seg[..., nseg:, :]], axis=-2))
