@@ -121,8 +121,9 @@ class Trajectory:
         ns, nseg = len(f.site_link), len(m.seg_link)
 
         def compute():
+            # site_pos is [n_sites, dims] even with no sites (figures.specparse)
             p = self._points(np.concatenate([f.site_link, m.seg_link, m.seg_link]),
-                             np.concatenate([np.reshape(f.site_pos, (ns, m.seg_a.shape[-1])), m.seg_a, m.seg_b]))
+                             np.concatenate([f.site_pos, m.seg_a, m.seg_b]))
             seg = p[..., ns:, :]
             return (np.ascontiguousarray(p[..., :ns, :]),
                     np.stack([seg[..., :nseg, :], seg[..., nseg:, :]], axis=-2))
