@@ -16,7 +16,7 @@ count a worker that finishes later than it, or memory contention).  A
 killed benchmark resumes where it stopped (runs already in the file are
 skipped).  The table at the end is built from the file.
 
-    python benchmarks/herman_success.py [--seeds 5] [--only touch_nose,point] [--out F]
+    python benchmarks/herman_success.py [--seeds 5] [--only touch_nose,point] [--targets rate] [--out F]
 """
 from __future__ import annotations
 
@@ -70,17 +70,20 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def run_one(name: str, seed: int, tmp: str | None = None) -> dict:
+def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = None) -> dict:
     task, params = {**CONFIGS, **EXTRA}[name]
+    family = {"targets": targets} if targets else {}
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(dir=tmp) as d:
         out = Path(d) / "run"
         t0, c0, m0 = time.perf_counter(), _cpu(), time.thread_time()
-        run(RunConfig(task=task, seed=seed, params=params), out, quiet=True, artifacts=False,
+        run(RunConfig(task=task, seed=seed, params=params, family_options=family), out,
+            quiet=True, artifacts=False,
             checkpoint_every=CHECKPOINT_S)
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
-    return {"config": name, "seed": seed, "success": bool(best["success"]),
+    return {"config": name, "seed": seed, "targets": targets or "task default",
+            "success": bool(best["success"]),
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "main_cpu_s": round(main, 1), "load": round(load, 1),
             "final_cost": round(best["final_cost"], 4), "facts": best.get("facts", [])}
@@ -119,6 +122,8 @@ def main(argv=None):
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--only", default="", help="comma list of: " + ", ".join({**CONFIGS, **EXTRA}))
     ap.add_argument("--out", default="herman_success.jsonl", help="results, one run a line (resumable)")
+    ap.add_argument("--targets", choices=["angle", "rate"], default=None,
+                    help="GP target mode for every run (default: each task's own)")
     args = ap.parse_args(argv)
     names = [n for n in args.only.split(",") if n] or list(CONFIGS)
     bad = [n for n in names if n not in {**CONFIGS, **EXTRA}]
@@ -132,7 +137,7 @@ def main(argv=None):
         for n in names:
             if (n, seed) in have:
                 continue
-            r = run_one(n, seed)
+            r = run_one(n, seed, targets=args.targets)
             with path.open("a") as f:
                 f.write(json.dumps(r) + "\n")
             print(f"{n} seed {seed}: {'solved' if r['success'] else 'NOT solved'} in "

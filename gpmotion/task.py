@@ -136,6 +136,7 @@ class Task:
     dt: ClassVar[float] = 1e-3
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
     gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
+    gp_targets: ClassVar[str] = "angle"                  # GP trees give angles or rates (--targets)
     curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 

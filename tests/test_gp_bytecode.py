@@ -19,8 +19,9 @@ import pytest
 from deap import gp
 
 from gpmotion.gp import primitives as registry
-from gpmotion.gp.bytecode import (MAX_TREE_DEPTH, OP_JUMP, STACK_CAP, encode_batch,
-                                  encode_trees, tokens_to_tree, tree_to_tokens)
+from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, RATE_STATE, STACK_CAP,
+                                  RateTargets, encode_batch, encode_trees, tokens_to_tree,
+                                  tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
 from gpmotion.gp.subgoals import MAX_SUBGOALS
@@ -138,14 +139,14 @@ def test_untaken_branch_is_never_executed(info, kernel):
     value when that branch is taken, and 0.0 (malformed) when the poisoned one is."""
     tree = tokens_to_tree(["ifpos", "px", "add", "vx", 1.0, "mul", "t", 2.0], info)
     ci, cf = encode_trees([tree], info, [0])
-    ops = ci[6:].reshape(-1, 2)           # after the 3 + 3 header
+    ops = ci[HEADER + 3:].reshape(-1, 2)  # after the header and the tree's row
     # px SELECT J | vx 1 add J | t 2 mul
     assert len(ops) == 10 and ops[2, 0] == ops[6, 0] == OP_JUMP
     s = np.zeros(len(SENSES))
     s[SENSES.index("vx")], s[SENSES.index("t")] = 2.0, 5.0
     for poisoned, rows in (("then", slice(3, 6)), ("else", slice(7, 10))):
         bad = ci.copy()
-        bad[6:].reshape(-1, 2)[rows, 0] = 999
+        bad[HEADER + 3:].reshape(-1, 2)[rows, 0] = 999
         for px, taken in ((1.0, "then"), (-1.0, "else")):
             s[0] = px
             got = kernel.run_tree(bad, cf, 0, s, np.zeros(STACK_CAP))
@@ -153,7 +154,7 @@ def test_untaken_branch_is_never_executed(info, kernel):
             assert got == want, (poisoned, px, got)
             assert run_tree_ref(bad, cf, 0, s, *funcs_selects(info)) == want
     eager, _ = encode_trees([tree], info, [0], lazy=False)   # eager: every op, no jumps
-    assert len(eager[6:]) // 2 == 8 and OP_JUMP not in eager[6::2]
+    assert len(eager[HEADER + 3:]) // 2 == 8 and OP_JUMP not in eager[HEADER + 3::2]
 
 
 def test_batch_control_writes_only_its_actuators(info, kernel, trees):
@@ -161,7 +162,7 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     inds = [trees[i:i + 3] for i in range(0, 30, 3)] + [trees[:1] * 3]
     batch = encode_batch(inds, info, acts)
     assert batch.module == str(interpreter_path(info))
-    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS
+    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS + RATE_STATE + 3
     funcs, selects = funcs_selects(info)
     s = np.random.default_rng(1).normal(size=len(SENSES))
     for r in range(batch.n_episodes):
@@ -181,6 +182,38 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     targets = np.full(5, -9.0)
     kernel.control(padded, batch.cf[0], s, s, 0.0, np.zeros(STACK_CAP), targets, targets)
     assert (targets == -9.0).all()
+
+
+def test_rate_targets_integrate_and_hold_within_the_joint_range(info, kernel, trees):
+    """Rate mode: target_k(t) = start + gain * integral of tree k's output, held
+    within [lo, hi]; the kernel agrees with the plain-Python twin step by step,
+    and constant trees give the analytic ramp."""
+    acts = [0, 2, 3]
+    rate = RateTargets(10.0, (-0.3, -1e6, -2.0), (0.3, 1e6, 2.0))   # tree 0's ramp reaches 0.3
+    consts = [tokens_to_tree([c], info) for c in (0.3, -0.7, 0.05)]
+    funcs, selects = funcs_selects(info)
+    rng = np.random.default_rng(4)
+    for ind in (consts, trees[3:6], trees[9:12]):
+        batch = encode_batch([ind], info, acts, rate=rate)
+        ci, cf = batch.ci[0], batch.cf[0]
+        assert ci[3] == 1 and cf[ci[4]] == 10.0
+        cstate = np.full(batch.cstate_size, 3.0)
+        kernel.init(ci, cf, cstate)
+        state, dt = {}, 0.002
+        for step in range(60):
+            s = rng.normal(size=len(SENSES))
+            got, want = np.full(5, 0.1), np.full(5, 0.1)     # the caller's start: 0.1
+            kernel.control(ci, cf, s, s, step * dt, cstate, got, np.zeros(5))
+            control_ref(ci, cf, s, want, funcs, selects, t=step * dt, rate=state)
+            assert np.allclose(got, want, rtol=1e-12, atol=1e-12), step
+            assert got[1] == got[4] == 0.1                      # others untouched
+            if ind is consts:                                   # the analytic ramp, clamped
+                ramp = [min(max(0.1 + 10.0 * c * step * dt, lo), hi)
+                        for c, lo, hi in zip((0.3, -0.7, 0.05), rate.lo, rate.hi)]
+                assert np.allclose(got[acts], ramp, rtol=0, atol=1e-12), step
+        assert abs(got[0]) <= 0.3 and abs(got[3]) <= 2.0
+    with pytest.raises(ValueError, match="joint ranges"):
+        encode_trees(consts, info, acts, rate=RateTargets(1.0, (0.0,), (1.0,)))
 
 
 @pytest.mark.parametrize("tokens, senses, want", [
@@ -264,8 +297,8 @@ def test_malformed_jumps_and_selects_give_zero(info, kernel):
     ci, cf = encode_trees([tree], info, [0])
     s = np.zeros(len(SENSES))
     assert kernel.run_tree(ci, cf, 0, s, np.zeros(STACK_CAP)) == 1.0
-    start = int(ci[4])
-    jumps = [start + 2 * k for k in range(int(ci[5])) if ci[start + 2 * k] == OP_JUMP]
+    start = int(ci[HEADER + 1])
+    jumps = [start + 2 * k for k in range(int(ci[HEADER + 2])) if ci[start + 2 * k] == OP_JUMP]
     for bad_arg in (-1, 99):                              # backwards / out of the tree
         bad = ci.copy()
         bad[jumps[-1] + 1] = bad_arg                      # the jump after branch 0

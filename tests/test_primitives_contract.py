@@ -8,7 +8,7 @@ import pytest
 from gpmotion import plugins
 from gpmotion.check import check_primitive, njit_copy
 from gpmotion.gp import primitives
-from gpmotion.gp.bytecode import STACK_CAP, encode_trees, tokens_to_tree
+from gpmotion.gp.bytecode import HEADER, STACK_CAP, encode_trees, tokens_to_tree
 from gpmotion.gp.interpreter import interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset
 
@@ -146,7 +146,7 @@ def test_user_conditional_is_lazy_and_agrees_with_deap(registry, tmp_path):
     kernel = load_interpreter(info)
     tree = tokens_to_tree(["pick3", "add", "px", 1.0, "mul", "px", "vx", "vx", "px"], info)
     ci, cf = encode_trees([tree], info, [0])
-    assert OP_JUMP in ci[6::2]
+    assert OP_JUMP in ci[HEADER + 3::2]
     ref = compile_reference(tree, info)
     for px in (-2.0, -0.5, 0.0, 0.5, 0.7, 3.0):
         s = np.array([px, 1.5])

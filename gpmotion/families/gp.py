@@ -16,7 +16,9 @@ from deap import gp
 from .. import cli_options
 from ..cli_options import Option, number
 from ..gp import bytecode
+from ..gp.opcodes import TARGET_MODES
 from ..gp.operators import random_tree
+from ..gp.primitives import CLAMP
 from ..gp.pset import build_pset
 from ..gp.subgoals import subgoal_table, task_subgoals
 from ..search.gp import GPSearch
@@ -28,6 +30,10 @@ from .base import Family, register_family
 GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0.02,
                    selection="roulette", elitism=1)
 BUDGET_POPULATION = 100            # compare's default population under a budget
+# Rate mode: a tree's output times RATE_GAIN (1/s) is its target's rate (rad/s),
+# so a tree of sense scale (a fingertip 0.1 m off) moves its target ~1 rad/s,
+# a reach in under a second, without constants the trees would have to grow.
+RATE_GAIN = 10.0
 
 
 def _primitives(flag, text):
@@ -95,11 +101,24 @@ _OWN = dict([
     _gp_option("--erc-range", "family", "erc_range",
                "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",
                "the range of GP random constants", dict(type=str, metavar="LO,HI"), _range),
+    _gp_option("--targets", "family", "targets",
+               "what a GP tree's output is: its joint's target angle (angle), or the "
+               "target's rate of change (rate: integral action, no steady-state offset "
+               "under gravity); default: the task's choice (gpmotion show TASK)",
+               "the GP target mode", dict(choices=list(TARGET_MODES))),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
                "the GP target time constant", dict(type=float), number(0.002, 10),
                _kinematic_only),
 ])
+
+
+def rate_targets(task, actuators) -> bytecode.RateTargets:
+    """Rate mode's gain and each controlled joint's range (targets stay inside)."""
+    m = task.figure.model
+    dof = m.act_dof[list(actuators)]
+    lo, hi = np.maximum(m.lo[dof], -CLAMP), np.minimum(m.hi[dof], CLAMP)   # a free joint: ±CLAMP
+    return bytecode.RateTargets(RATE_GAIN, tuple(map(float, lo)), tuple(map(float, hi)))
 
 
 def _check_erc_range(r):
@@ -121,7 +140,7 @@ class GPFamily(Family):
     plot_file = "trees.png"
 
     def __init__(self, task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
-                 terminals=None, subgoals=False, **options):
+                 terminals=None, subgoals=False, targets=None, **options):
         # tau: the fixed time constant of GP targets under `kinematic` actuation
         # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair);
         # terminals: sense names replacing the task's terminal set (a preset's);
@@ -142,6 +161,10 @@ class GPFamily(Family):
                                sense_names=task.figure.sense_names, erc_range=tuple(erc_range),
                                flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
+        self.options["targets"] = targets = targets or task.gp_targets
+        self.rate = rate_targets(task, self.actuators) if targets == "rate" else None
+        if targets not in TARGET_MODES:
+            raise ValueError(f"GP targets must be one of {', '.join(TARGET_MODES)}, got {targets!r}")
 
     @property
     def pset(self):
@@ -161,7 +184,7 @@ class GPFamily(Family):
 
     def encode(self, genomes):
         return bytecode.encode_batch(list(genomes), self.info, self.actuators,
-                                     subgoals=self.subgoal_table)
+                                     subgoals=self.subgoal_table, rate=self.rate)
 
     def copy(self, genome):
         return [list(t) for t in genome]

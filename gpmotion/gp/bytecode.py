@@ -8,10 +8,15 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
     ci[0]            n_trees
     ci[1]            max stack need over the trees (<= STACK_CAP)
     ci[2]            n_flags: subgoal flags (gpmotion.gp.subgoals)
-    ci[3 + 3k + 0]   actuator index driven by tree k
-    ci[3 + 3k + 1]   start offset in ci of tree k's op stream
-    ci[3 + 3k + 2]   number of ops of tree k
-    ci[3 + 3n + 3j]  subgoal j: sense index, test code, index in cf of its
+    ci[3]            target mode: 0 "angle" (a tree's output is its joint's
+                     target angle), 1 "rate" (the output times a gain is the
+                     target's rate of change: integral action)
+    ci[4]            rate mode: offset in cf of [gain, lo_0, hi_0, lo_1, ...]
+                     (each target is held within its joint's range)
+    ci[5 + 3k + 0]   actuator index driven by tree k
+    ci[5 + 3k + 1]   start offset in ci of tree k's op stream
+    ci[5 + 3k + 2]   number of ops of tree k
+    ci[5 + 3n + 3j]  subgoal j: sense index, test code, index in cf of its
                      threshold (n = n_trees)
     then ops, two ints each: (opcode, operand)
         opcode 0     push clamp(senses[operand])
@@ -24,7 +29,8 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
                      through the jump table that follows (``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
-interpreter's stack (STACK_CAP slots) followed by MAX_SUBGOALS flag slots.
+interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (rate
+mode) the previous step's time, a started flag and one target per tree.
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
 prefix list of primitive names, terminal names and numbers (constants).
@@ -34,6 +40,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -42,13 +49,23 @@ from deap import gp
 from gpmotion.controllers import ControllerBatch
 from gpmotion.gp.interpreter import interpreter_path
 from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # noqa: F401 (re-exported)
-                                 OP_PUSH_FLAG, OP_PUSH_SENSE, STACK_CAP)
+                                 OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE, STACK_CAP)
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
 from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
+
+
+@dataclass(frozen=True)
+class RateTargets:
+    """Rate mode: target_k += dt * gain * tree_k, held within [lo_k, hi_k]
+    (the joint's range, so a target never winds up past a limit).  Each
+    target starts at its joint's neutral angle."""
+    gain: float
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
 
 
 def is_erc(node) -> bool:
@@ -135,19 +152,26 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
 
 
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
-                 lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = ()):
+                 lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
+                 rate: RateTargets | None = None):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
-    ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order."""
+    ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order;
+    ``rate``: the trees drive their targets' rates (None: the angles)."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
     if len(subgoals) != len(info.flag_names):
         raise ValueError(f"{len(subgoals)} subgoal tests for {len(info.flag_names)} subgoal terminals")
     n = len(trees)
     compiled = [_compiled(t, info, lazy) for t in trees]
-    ci = [n, max((c[2] for c in compiled), default=0), len(subgoals)] + [0] * (3 * n)
+    ci = [n, max((c[2] for c in compiled), default=0), len(subgoals), 0, 0] + [0] * (3 * n)
     cf: list[float] = []
+    if rate is not None:
+        if len(rate.lo) != n or len(rate.hi) != n:
+            raise ValueError(f"rate targets: {len(rate.lo)} joint ranges for {n} trees")
+        ci[3:5] = [1, len(cf)]
+        cf += [float(rate.gain)] + [float(v) for pair in zip(rate.lo, rate.hi) for v in pair]
     for sense, code, threshold in subgoals:
         ci += [int(sense), int(code), len(cf)]
         cf.append(float(threshold))
@@ -183,15 +207,17 @@ def _compiled(t, info: PsetInfo, lazy: bool):
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
-                 lazy: bool = True, subgoals=()) -> ControllerBatch:
+                 lazy: bool = True, subgoals=(), rate: RateTargets | None = None
+                 ) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
-    as in :func:`compile_tree` (the eager form is for benchmarks).
+    as in :func:`compile_tree` (the eager form is for benchmarks); ``rate``
+    as in :func:`encode_trees`.
     """
     if module is None:
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, rate) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)
@@ -199,8 +225,9 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
     for i, (a, b) in enumerate(rows):
         ci[i, :len(a)] = a
         cf[i, :len(b)] = b
+    n_trees = max([len(ind) for ind in individuals] + [0])
     return ControllerBatch(module=str(module), ci=ci, cf=cf,
-                           cstate_size=STACK_CAP + MAX_SUBGOALS)
+                           cstate_size=STACK_CAP + MAX_SUBGOALS + RATE_STATE + n_trees)
 
 
 # ---------------------------------------------------------------- tokens

@@ -10,12 +10,14 @@ table that follows, branch j > 0 takes the table's jump j - 1).
 """
 from gpmotion.gp.primitives import clamp
 
+HEADER = 5      # n_trees, max stack, n_flags, target mode, offset of rate data
+
 
 def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, flags=()):
     """funcs[k] is the Python function of opcode 4 + k; selects[k] its selector
     positions (empty: not a conditional); flags: the subgoal flags' values."""
     selects = selects or [()] * len(funcs)
-    h = 3 + 3 * tree_index
+    h = HEADER + 3 * tree_index
     pos, n_ops = int(ci[h + 1]), int(ci[h + 2])
     end = pos + 2 * n_ops
     stack = []
@@ -69,16 +71,33 @@ def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, 
 
 def update_flags_ref(ci, cf, senses, flags):
     """Latch subgoal flag j once its test holds: 0 sense > thr, 1 <, 2 |sense| <."""
-    b = 3 + 3 * int(ci[0])
+    b = HEADER + 3 * int(ci[0])
     for j in range(int(ci[2])):
         v, code, thr = senses[int(ci[b + 3 * j])], int(ci[b + 3 * j + 1]), cf[int(ci[b + 3 * j + 2])]
         if (v > thr, v < thr, abs(v) < thr)[code]:
             flags[j] = 1.0
 
 
-def control_ref(ci, cf, senses, targets, funcs, selects=None, flags=None):
-    """One control step; ``flags`` (a list, kept by the caller across steps)."""
+def control_ref(ci, cf, senses, targets, funcs, selects=None, flags=None, t=0.0, rate=None):
+    """One control step at time ``t``; ``flags`` (a list) and ``rate`` (a dict,
+    rate mode's previous time and targets) are kept by the caller across steps.
+    Rate mode (ci[3] == 1): target += (t - previous t) * gain * tree output,
+    held within the joint's range [lo, hi]; it starts at the caller's target."""
     flags = [0.0] * int(ci[2]) if flags is None else flags
     update_flags_ref(ci, cf, senses, flags)
-    for k in range(int(ci[0])):
-        targets[int(ci[3 + 3 * k])] = run_tree_ref(ci, cf, k, senses, funcs, selects, flags=flags)
+    n = int(ci[0])
+    acts = [int(ci[HEADER + 3 * k]) for k in range(n)]
+    outs = [run_tree_ref(ci, cf, k, senses, funcs, selects, flags=flags) for k in range(n)]
+    if int(ci[3]) != 1:
+        for a, v in zip(acts, outs):
+            targets[a] = v
+        return
+    rate = {} if rate is None else rate
+    if "t" not in rate:
+        rate["t"], rate["targets"] = t, [targets[a] for a in acts]
+    h, rate["t"] = t - rate["t"], t
+    g = int(ci[4])
+    for k, (a, v) in enumerate(zip(acts, outs)):
+        lo, hi = cf[g + 1 + 2 * k], cf[g + 2 + 2 * k]
+        rate["targets"][k] = min(max(rate["targets"][k] + h * cf[g] * v, lo), hi)
+        targets[a] = rate["targets"][k]
