@@ -70,19 +70,22 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = None) -> dict:
+def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = None,
+            search: dict | None = None) -> dict:
     task, params = {**CONFIGS, **EXTRA}[name]
     family = {"targets": targets} if targets else {}
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(dir=tmp) as d:
         out = Path(d) / "run"
         t0, c0, m0 = time.perf_counter(), _cpu(), time.thread_time()
-        run(RunConfig(task=task, seed=seed, params=params, family_options=family), out,
+        run(RunConfig(task=task, seed=seed, params=params, family_options=family,
+                      search=dict(search or {})), out,
             quiet=True, artifacts=False,
             checkpoint_every=CHECKPOINT_S)
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
     return {"config": name, "seed": seed, "targets": targets or "task default",
+            **({"search": search} if search else {}),
             "success": bool(best["success"]),
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "main_cpu_s": round(main, 1), "load": round(load, 1),
@@ -124,7 +127,17 @@ def main(argv=None):
     ap.add_argument("--out", default="herman_success.jsonl", help="results, one run a line (resumable)")
     ap.add_argument("--targets", choices=["angle", "rate"], default=None,
                     help="GP target mode for every run (default: each task's own)")
+    ap.add_argument("--search", action="append", default=[], metavar="KEY=VALUE",
+                    help="a GP search setting for every run, e.g. selection=tournament "
+                         "(repeatable; numbers are read as numbers)")
     args = ap.parse_args(argv)
+    search = {}
+    for item in args.search:
+        key, _, value = item.partition("=")
+        try:
+            search[key] = json.loads(value)
+        except ValueError:
+            search[key] = value
     names = [n for n in args.only.split(",") if n] or list(CONFIGS)
     bad = [n for n in names if n not in {**CONFIGS, **EXTRA}]
     if bad:
@@ -137,7 +150,7 @@ def main(argv=None):
         for n in names:
             if (n, seed) in have:
                 continue
-            r = run_one(n, seed, targets=args.targets)
+            r = run_one(n, seed, targets=args.targets, search=search)
             with path.open("a") as f:
                 f.write(json.dumps(r) + "\n")
             print(f"{n} seed {seed}: {'solved' if r['success'] else 'NOT solved'} in "

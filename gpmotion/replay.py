@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .inprocess import InProcessEvaluator
-from .families import make_family
+from .families import make_family, recorded_options
 from .records import FormatError, read_json
 from .task import get_task, task_id
 
@@ -34,7 +34,8 @@ def load_controller(path: str | Path):
     require(rec.get("plugins"), str(path))
     try:
         task = get_task(task_id(str(rec["task"]), recorded=True), **dict(rec.get("params", {})))
-        family = make_family(str(rec["family"]), task, **dict(rec.get("options", {})))
+        options = recorded_options(str(rec["family"]), rec.get("options"), rec.get("options"))
+        family = make_family(str(rec["family"]), task, **options)
         genome = family.from_json(rec["genome"])
         actuation = str(rec.get("actuation") or family.default_actuation)
     except (KeyError, TypeError) as e:

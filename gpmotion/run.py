@@ -23,7 +23,7 @@ import numpy as np
 
 from .inprocess import spec_of
 from .version import __version__
-from .families import make_family
+from .families import make_family, recorded_options
 from .records import ConfigError, FormatError, validate_number
 from .rundir import RunDir
 from .runconfig import (RunConfig, check_resume_request, config_digest, new_run_id,
@@ -213,6 +213,8 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
         if resume:
             rd, cfg, doc = _open_resume(out)
             cfg.task = task_id(cfg.task, recorded=True)      # bare: recorded before ids, its v1
+            cfg.family_options = recorded_options(cfg.family, doc.get("family_config"),
+                                                  cfg.family_options)
             if given is not None and given.task in (cfg.task, cfg.task.rsplit("-v", 1)[0]):
                 given.task = cfg.task                        # the bare name of the recorded task
             task, family, search, actuation = build(cfg)

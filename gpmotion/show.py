@@ -1,6 +1,7 @@
 """``gpmotion show TASK``: everything a user needs to set up a run of a task."""
 from __future__ import annotations
 
+from .gp.opcodes import TARGET_MODES
 from .task import Task, get_task
 
 
@@ -75,5 +76,6 @@ def describe_task(name: str) -> str:
               _wrap("GP terminals (senses)", task.terminal_names()),
               _wrap("GP primitives (the task's set; --primitives to change)", task.primitives),
               _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
-              f"GP search defaults: {gp_defaults or 'population 300, generations 40'}"]
+              f"GP search defaults: {gp_defaults or 'population 300, generations 40'}",
+              f"GP targets: {task.gp_targets} ({TARGET_MODES[task.gp_targets]}; --targets to change)"]
     return "\n".join(lines)

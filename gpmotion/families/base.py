@@ -48,6 +48,9 @@ class Family:
     takes_population = False      # ``compare --population`` applies
     plot_file: str | None = None  # artifact name of ``plot`` (e.g. trees.png)
     presets: tuple = ()           # names ``apply_preset`` knows
+    # option -> the value a record written before the option existed meant
+    # (its default now may differ, e.g. come from the task): see recorded_options
+    legacy_options: dict = {}
 
     def __init__(self, task, **options):
         self.task = task
@@ -163,6 +166,18 @@ def family_class(name: str) -> type:
     if name not in _FAMILIES:
         raise ValueError(unknown("controller family", name, _FAMILIES))
     return _FAMILIES[name]
+
+
+def recorded_options(name: str, recorded: dict | None, given: dict | None = None) -> dict:
+    """The options that rebuild a recorded family: ``given`` (a run's own
+    options), then for each of the family's ``legacy_options`` the value the
+    record holds (``recorded``: its family config or a controller's options),
+    or the legacy value when the record predates the option."""
+    recorded, out = dict(recorded or {}), dict(given or {})
+    for key, legacy in family_class(name).legacy_options.items():
+        if out.get(key) is None:
+            out[key] = recorded.get(key, legacy)
+    return out
 
 
 def make_family(name: str, task, **options) -> Family:

@@ -138,6 +138,7 @@ class GPFamily(Family):
     cli = {"--generations": "generations", "--population": "population", **_OWN}
     takes_population = True
     plot_file = "trees.png"
+    legacy_options = {"targets": "angle"}     # before rate targets, every tree gave an angle
 
     def __init__(self, task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
                  terminals=None, subgoals=False, targets=None, **options):

@@ -1,0 +1,56 @@
+"""GP rate targets (``--targets rate``): a tree's output drives its joint
+target's rate of change, so a tree that is zero only at the goal settles
+there exactly under gravity, where an angle target settles with the PD
+servo's offset; the mode is recorded, and a record from before it existed
+replays as angles."""
+import numpy as np
+import pytest
+
+from gpmotion.families import make_family, recorded_options
+from gpmotion.replay import replay_genome
+from gpmotion.task import get_task
+
+POSE = {"shoulder_r_y": -0.4, "shoulder_r_z": 0.6, "shoulder_r_x": 0.2, "elbow_r": 1.0,
+        "wrist_r_y": 0.1, "wrist_r_x": -0.1}     # the arm out to the side, bent: loaded
+
+
+def final_angles(targets, trees_of):
+    task = get_task("herman_touch_nose", seconds=2.0)
+    fam = make_family("gp", task, targets=targets)
+    names = [task.figure.actuator_names[i] for i in fam.actuators]
+    traj, *_ = replay_genome(task, fam, "pd", [trees_of(n) for n in names])
+    m = task.figure.model
+    return traj.q[0, -1, m.act_q[fam.actuators]], np.array([POSE[n] for n in names]), traj
+
+
+def test_integral_action_removes_the_steady_state_offset_under_gravity():
+    # angle mode: the target is the pose itself; PD under the arm's weight sags
+    got, want, _ = final_angles("angle", lambda n: [POSE[n]])
+    assert np.abs(got - want).max() > 0.01
+    # rate mode: the target moves while the joint is off the pose (tree = pose - angle)
+    got, want, traj = final_angles("rate", lambda n: ["sub", POSE[n], f"angle_{n}"])
+    assert np.abs(got - want).max() < 1e-3
+    assert np.abs(traj.qd[0, -1]).max() < 1e-2               # settled, not passing through
+
+
+def test_rate_targets_start_at_neutral_and_hold_within_the_joint_range():
+    task = get_task("herman_touch_nose", seconds=1.0)
+    fam = make_family("gp", task, targets="rate")
+    m = task.figure.model
+    traj, *_ = replay_genome(task, fam, "pd", [[5.0]] * len(fam.actuators))   # 50 rad/s up
+    acts = list(fam.actuators)
+    assert np.allclose(traj.targets[0, 0, acts], m.neutral[acts])
+    assert np.allclose(traj.targets[0, -1, acts], np.minimum(m.hi[m.act_dof[acts]], 1e6))
+    rest = [a for a in range(m.act_dof.shape[0]) if a not in acts]
+    assert np.allclose(traj.targets[0, :, rest], m.neutral[rest][:, None])   # held: neutral
+
+
+def test_the_mode_is_the_task_default_recorded_and_legacy_records_mean_angles():
+    task = get_task("herman_touch_nose")
+    assert make_family("gp", task).options["targets"] == task.gp_targets
+    assert make_family("gp", task, targets="rate").config()["targets"] == "rate"
+    assert recorded_options("gp", {"family": "gp", "tau": 0.1}) == {"targets": "angle"}
+    assert recorded_options("gp", {"targets": "rate"}) == {"targets": "rate"}
+    assert recorded_options("gp", {}, {"targets": "rate"}) == {"targets": "rate"}
+    with pytest.raises(ValueError, match="targets must be one of"):
+        make_family("gp", task, targets="velocity")
