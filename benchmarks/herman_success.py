@@ -71,9 +71,9 @@ def _cpu() -> float:
 
 
 def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = None,
-            search: dict | None = None) -> dict:
+            search: dict | None = None, family: dict | None = None) -> dict:
     task, params = {**CONFIGS, **EXTRA}[name]
-    family = {"targets": targets} if targets else {}
+    family = {**(family or {}), **({"targets": targets} if targets else {})}
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(dir=tmp) as d:
         out = Path(d) / "run"
@@ -86,6 +86,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
         best = read_json(out / "best.json", kind="best")
     return {"config": name, "seed": seed, "targets": targets or "task default",
             **({"search": search} if search else {}),
+            **({"family": family} if family else {}),
             "success": bool(best["success"]),
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "main_cpu_s": round(main, 1), "load": round(load, 1),
@@ -119,6 +120,18 @@ def table(rows: list[dict], names) -> str:
     return "\n".join(lines)
 
 
+def _settings(items) -> dict:
+    """KEY=VALUE strings -> a dict; values parsed as JSON where they are JSON."""
+    out = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        try:
+            out[key] = json.loads(value)
+        except ValueError:
+            out[key] = value
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
@@ -130,14 +143,10 @@ def main(argv=None):
     ap.add_argument("--search", action="append", default=[], metavar="KEY=VALUE",
                     help="a GP search setting for every run, e.g. selection=tournament "
                          "(repeatable; numbers are read as numbers)")
+    ap.add_argument("--family", action="append", default=[], metavar="KEY=VALUE",
+                    help="a GP family option for every run, e.g. erc_range=[-3,3] (repeatable)")
     args = ap.parse_args(argv)
-    search = {}
-    for item in args.search:
-        key, _, value = item.partition("=")
-        try:
-            search[key] = json.loads(value)
-        except ValueError:
-            search[key] = value
+    search, family = _settings(args.search), _settings(args.family)
     names = [n for n in args.only.split(",") if n] or list(CONFIGS)
     bad = [n for n in names if n not in {**CONFIGS, **EXTRA}]
     if bad:
@@ -150,7 +159,7 @@ def main(argv=None):
         for n in names:
             if (n, seed) in have:
                 continue
-            r = run_one(n, seed, targets=args.targets, search=search)
+            r = run_one(n, seed, targets=args.targets, search=search, family=family)
             with path.open("a") as f:
                 f.write(json.dumps(r) + "\n")
             print(f"{n} seed {seed}: {'solved' if r['success'] else 'NOT solved'} in "
