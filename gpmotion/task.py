@@ -356,8 +356,8 @@ def register_task(cls: type[Task]) -> type[Task]:
     if (not isinstance(cls.primitives, tuple) or not cls.primitives
             or not all(isinstance(n, str) for n in cls.primitives)):
         raise ValueError(f"task {cls.name}: primitives must be a non-empty tuple of primitive names")
-    if cls.gp_targets not in ("angle", "rate"):     # gpmotion.gp.opcodes.TARGET_MODES
-        raise ValueError(f"task {cls.name}: gp_targets must be 'angle' or 'rate', got "
+    if cls.gp_targets not in ("angle", "rate", "pi"):     # gpmotion.gp.opcodes.TARGET_MODES
+        raise ValueError(f"task {cls.name}: gp_targets must be 'angle', 'rate' or 'pi', got "
                          f"{cls.gp_targets!r}")
     old = _TASKS.get(cls.id)
     if old is not None and inspect.getsourcefile(old) != inspect.getsourcefile(cls):

@@ -20,8 +20,9 @@ from deap import gp
 
 from gpmotion.gp import primitives as registry
 from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, RATE_STATE, STACK_CAP,
-                                  RateTargets, encode_batch, encode_trees, tokens_to_tree,
+                                  TargetLaw, encode_batch, encode_trees, tokens_to_tree,
                                   tree_to_tokens)
+from gpmotion.gp.opcodes import TARGET_MODES
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
 from gpmotion.gp.subgoals import MAX_SUBGOALS
@@ -184,36 +185,68 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     assert (targets == -9.0).all()
 
 
+def run_law(kernel, info, ind, acts, law, rng, steps=60, dt=0.002):
+    """Step the kernel and the plain-Python twin side by side; yield each step's
+    (step, targets, senses)."""
+    funcs, selects = funcs_selects(info)
+    batch = encode_batch([ind], info, acts, law=law)
+    ci, cf = batch.ci[0], batch.cf[0]
+    assert ci[3] == list(TARGET_MODES).index(law.mode) and cf[ci[4]] == law.gain
+    cstate = np.full(batch.cstate_size, 3.0)
+    kernel.init(ci, cf, cstate)
+    state = {}
+    for step in range(steps):
+        s = rng.normal(size=len(SENSES))
+        got, want = np.full(5, 0.1), np.full(5, 0.1)     # the caller's start: 0.1
+        kernel.control(ci, cf, s, s, step * dt, cstate, got, np.zeros(5))
+        control_ref(ci, cf, s, want, funcs, selects, t=step * dt, rate=state)
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-12), step
+        assert got[1] == got[4] == 0.1                      # others untouched
+        yield step, got, s
+
+
 def test_rate_targets_integrate_and_hold_within_the_joint_range(info, kernel, trees):
     """Rate mode: target_k(t) = start + gain * integral of tree k's output, held
     within [lo, hi]; the kernel agrees with the plain-Python twin step by step,
     and constant trees give the analytic ramp."""
     acts = [0, 2, 3]
-    rate = RateTargets(10.0, (-0.3, -1e6, -2.0), (0.3, 1e6, 2.0))   # tree 0's ramp reaches 0.3
+    law = TargetLaw("rate", 10.0, (-0.3, -1e6, -2.0), (0.3, 1e6, 2.0))   # tree 0's ramp reaches 0.3
     consts = [tokens_to_tree([c], info) for c in (0.3, -0.7, 0.05)]
-    funcs, selects = funcs_selects(info)
     rng = np.random.default_rng(4)
     for ind in (consts, trees[3:6], trees[9:12]):
-        batch = encode_batch([ind], info, acts, rate=rate)
-        ci, cf = batch.ci[0], batch.cf[0]
-        assert ci[3] == 1 and cf[ci[4]] == 10.0
-        cstate = np.full(batch.cstate_size, 3.0)
-        kernel.init(ci, cf, cstate)
-        state, dt = {}, 0.002
-        for step in range(60):
-            s = rng.normal(size=len(SENSES))
-            got, want = np.full(5, 0.1), np.full(5, 0.1)     # the caller's start: 0.1
-            kernel.control(ci, cf, s, s, step * dt, cstate, got, np.zeros(5))
-            control_ref(ci, cf, s, want, funcs, selects, t=step * dt, rate=state)
-            assert np.allclose(got, want, rtol=1e-12, atol=1e-12), step
-            assert got[1] == got[4] == 0.1                      # others untouched
+        for step, got, _ in run_law(kernel, info, ind, acts, law, rng):
             if ind is consts:                                   # the analytic ramp, clamped
-                ramp = [min(max(0.1 + 10.0 * c * step * dt, lo), hi)
-                        for c, lo, hi in zip((0.3, -0.7, 0.05), rate.lo, rate.hi)]
+                ramp = [min(max(0.1 + 10.0 * c * step * 0.002, lo), hi)
+                        for c, lo, hi in zip((0.3, -0.7, 0.05), law.a, law.b)]
                 assert np.allclose(got[acts], ramp, rtol=0, atol=1e-12), step
         assert abs(got[0]) <= 0.3 and abs(got[3]) <= 2.0
-    with pytest.raises(ValueError, match="joint ranges"):
-        encode_trees(consts, info, acts, rate=RateTargets(1.0, (0.0,), (1.0,)))
+    with pytest.raises(ValueError, match="joint entries"):
+        encode_trees(consts, info, acts, law=TargetLaw("rate", 1.0, (0.0,), (1.0,)))
+
+
+def test_pi_targets_add_the_bounded_integral_of_the_angle_error(info, kernel, trees):
+    """Pi mode: target_k = tree_k + I_k, I_k the integral of gain * (tree_k -
+    its angle sense), |I_k| <= bound; kernel and twin agree step by step, and
+    a constant tree against a constant angle gives the analytic ramp."""
+    acts = [0, 2, 3]
+    angle = SENSES.index("angle_shoulder")
+    law = TargetLaw("pi", 5.0, (float(angle),) * 3, (0.05, 0.5, 0.5))
+    rng = np.random.default_rng(5)
+    for ind in (trees[3:6], trees[12:15]):
+        for _, got, _ in run_law(kernel, info, ind, acts, law, rng):
+            pass
+    consts = [tokens_to_tree([c], info) for c in (0.3, -0.7, 0.05)]
+    funcs, selects = funcs_selects(info)
+    batch = encode_batch([consts], info, acts, law=law)
+    cstate = np.zeros(batch.cstate_size)
+    s = np.zeros(len(SENSES))
+    s[angle] = 0.2                                        # the joint sits at 0.2 rad
+    for step in range(40):
+        got = np.zeros(5)
+        kernel.control(batch.ci[0], batch.cf[0], s, s, step * 0.01, cstate, got, np.zeros(5))
+        want = [c + min(max(5.0 * (c - 0.2) * step * 0.01, -b), b)
+                for c, b in zip((0.3, -0.7, 0.05), law.b)]
+        assert np.allclose(got[acts], want, rtol=0, atol=1e-12), step
 
 
 @pytest.mark.parametrize("tokens, senses, want", [

@@ -31,6 +31,18 @@ def test_integral_action_removes_the_steady_state_offset_under_gravity():
     got, want, traj = final_angles("rate", lambda n: ["sub", POSE[n], f"angle_{n}"])
     assert np.abs(got - want).max() < 1e-3
     assert np.abs(traj.qd[0, -1]).max() < 1e-2               # settled, not passing through
+    # pi mode: the same angle targets as the angle mode's, the sag integrated away
+    got, want, traj = final_angles("pi", lambda n: [POSE[n]])
+    assert np.abs(got - want).max() < 1e-3
+    assert np.abs(traj.qd[0, -1]).max() < 1e-2
+
+
+def test_pi_targets_need_the_joints_angle_senses():
+    from gpmotion.families.gp import target_law
+    task = get_task("herman_touch_nose")
+    law = target_law(task, make_family("gp", task).actuators, "pi")
+    names = [task.figure.sense_names[int(a)] for a in law.a]
+    assert names == [f"angle_{task.figure.actuator_names[i]}" for i in task.controlled_actuators()]
 
 
 def test_rate_targets_start_at_neutral_and_hold_within_the_joint_range():
@@ -52,5 +64,6 @@ def test_the_mode_is_the_task_default_recorded_and_legacy_records_mean_angles():
     assert recorded_options("gp", {"family": "gp", "tau": 0.1}) == {"targets": "angle"}
     assert recorded_options("gp", {"targets": "rate"}) == {"targets": "rate"}
     assert recorded_options("gp", {}, {"targets": "rate"}) == {"targets": "rate"}
+    assert recorded_options("gp", {"targets": "pi"}) == {"targets": "pi"}
     with pytest.raises(ValueError, match="targets must be one of"):
         make_family("gp", task, targets="velocity")

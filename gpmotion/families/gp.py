@@ -34,6 +34,9 @@ BUDGET_POPULATION = 100            # compare's default population under a budget
 # so a tree of sense scale (a fingertip 0.1 m off) moves its target ~1 rad/s,
 # a reach in under a second, without constants the trees would have to grow.
 RATE_GAIN = 10.0
+# Pi mode: the integral term removes a sag of 0.1 rad in ~0.2 s (1/PI_GAIN),
+# slower than the PD servo's own response, and corrects at most PI_BOUND rad.
+PI_GAIN, PI_BOUND = 5.0, 0.5
 
 
 def _primitives(flag, text):
@@ -102,9 +105,10 @@ _OWN = dict([
                "GP random constants are uniform in [LO, HI] (default -1,1; write --erc-range=-2,2)",
                "the range of GP random constants", dict(type=str, metavar="LO,HI"), _range),
     _gp_option("--targets", "family", "targets",
-               "what a GP tree's output is: its joint's target angle (angle), or the "
-               "target's rate of change (rate: integral action, no steady-state offset "
-               "under gravity); default: the task's choice (gpmotion show TASK)",
+               "what a GP tree's output is: its joint's target angle (angle); the "
+               "target's rate of change (rate: integral action); or the joint's angle "
+               "reached without the PD servo's sag under gravity (pi: an integral term "
+               "corrects the target); default: the task's choice (gpmotion show TASK)",
                "the GP target mode", dict(choices=list(TARGET_MODES))),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
@@ -113,12 +117,24 @@ _OWN = dict([
 ])
 
 
-def rate_targets(task, actuators) -> bytecode.RateTargets:
-    """Rate mode's gain and each controlled joint's range (targets stay inside)."""
-    m = task.figure.model
-    dof = m.act_dof[list(actuators)]
-    lo, hi = np.maximum(m.lo[dof], -CLAMP), np.minimum(m.hi[dof], CLAMP)   # a free joint: ±CLAMP
-    return bytecode.RateTargets(RATE_GAIN, tuple(map(float, lo)), tuple(map(float, hi)))
+def target_law(task, actuators, mode: str) -> bytecode.TargetLaw | None:
+    """The law of a target mode (None for angles): rate mode's gain and each
+    joint's range (targets stay inside); pi mode's gain, each joint's angle
+    sense and the integral's bound."""
+    if mode == "angle":
+        return None
+    fig, m = task.figure, task.figure.model
+    if mode == "rate":
+        dof = m.act_dof[list(actuators)]
+        lo, hi = np.maximum(m.lo[dof], -CLAMP), np.minimum(m.hi[dof], CLAMP)   # a free joint: ±CLAMP
+        return bytecode.TargetLaw("rate", RATE_GAIN, tuple(map(float, lo)), tuple(map(float, hi)))
+    names = [f"angle_{fig.actuator_names[a]}" for a in actuators]
+    missing = [n for n in names if n not in fig.sense_names]
+    if missing:
+        raise ValueError(f"GP targets pi need each controlled joint's angle sense; "
+                         f"{fig.name} has no {', '.join(missing)}")
+    return bytecode.TargetLaw("pi", PI_GAIN, tuple(float(fig.sense_names.index(n)) for n in names),
+                              (PI_BOUND,) * len(names))
 
 
 def _check_erc_range(r):
@@ -163,9 +179,9 @@ class GPFamily(Family):
                                flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
         self.options["targets"] = targets = targets or task.gp_targets
-        self.rate = rate_targets(task, self.actuators) if targets == "rate" else None
         if targets not in TARGET_MODES:
             raise ValueError(f"GP targets must be one of {', '.join(TARGET_MODES)}, got {targets!r}")
+        self.law = target_law(task, self.actuators, targets)
 
     @property
     def pset(self):
@@ -185,7 +201,7 @@ class GPFamily(Family):
 
     def encode(self, genomes):
         return bytecode.encode_batch(list(genomes), self.info, self.actuators,
-                                     subgoals=self.subgoal_table, rate=self.rate)
+                                     subgoals=self.subgoal_table, law=self.law)
 
     def copy(self, genome):
         return [list(t) for t in genome]

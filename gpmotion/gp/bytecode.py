@@ -10,9 +10,9 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
     ci[2]            n_flags: subgoal flags (gpmotion.gp.subgoals)
     ci[3]            target mode: 0 "angle" (a tree's output is its joint's
                      target angle), 1 "rate" (the output times a gain is the
-                     target's rate of change: integral action)
-    ci[4]            rate mode: offset in cf of [gain, lo_0, hi_0, lo_1, ...]
-                     (each target is held within its joint's range)
+                     target's rate of change), 2 "pi" (the output is the
+                     angle, reached through an integral term): TargetLaw
+    ci[4]            modes 1, 2: offset in cf of [gain, a_0, b_0, a_1, ...]
     ci[5 + 3k + 0]   actuator index driven by tree k
     ci[5 + 3k + 1]   start offset in ci of tree k's op stream
     ci[5 + 3k + 2]   number of ops of tree k
@@ -29,8 +29,9 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
                      through the jump table that follows (``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
-interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (rate
-mode) the previous step's time, a started flag and one target per tree.
+interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (modes
+1, 2) the previous step's time, a started flag and one value per tree (the
+target; the integral).
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
 prefix list of primitive names, terminal names and numbers (constants).
@@ -49,7 +50,8 @@ from deap import gp
 from gpmotion.controllers import ControllerBatch
 from gpmotion.gp.interpreter import interpreter_path
 from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # noqa: F401 (re-exported)
-                                 OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE, STACK_CAP)
+                                 OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE, STACK_CAP,
+                                 TARGET_MODES)
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
 from gpmotion.gp.subgoals import MAX_SUBGOALS
@@ -59,13 +61,20 @@ MAX_TREE_DEPTH = 17     # Koza's depth limit
 
 
 @dataclass(frozen=True)
-class RateTargets:
-    """Rate mode: target_k += dt * gain * tree_k, held within [lo_k, hi_k]
-    (the joint's range, so a target never winds up past a limit).  Each
-    target starts at its joint's neutral angle."""
+class TargetLaw:
+    """How the trees drive their targets when not as angles (ci[3] = the code
+    of ``mode`` in TARGET_MODES), with two numbers a_k, b_k per tree:
+
+    * ``rate``: target_k += dt * gain * tree_k, held within [a_k, b_k] (the
+      joint's range, so a target never winds up past a limit); each target
+      starts at its joint's neutral angle.
+    * ``pi``: target_k = tree_k + I_k with I_k += dt * gain * (tree_k -
+      senses[a_k]) (a_k: the joint's angle sense), |I_k| <= b_k: the tree's
+      angle reached without the PD servo's sag (a PI servo)."""
+    mode: str
     gain: float
-    lo: tuple[float, ...]
-    hi: tuple[float, ...]
+    a: tuple[float, ...]
+    b: tuple[float, ...]
 
 
 def is_erc(node) -> bool:
@@ -153,12 +162,12 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
 
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
-                 rate: RateTargets | None = None):
+                 law: TargetLaw | None = None):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
     ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order;
-    ``rate``: the trees drive their targets' rates (None: the angles)."""
+    ``law``: how the trees drive their targets (None: as angles)."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
     if len(subgoals) != len(info.flag_names):
@@ -167,11 +176,11 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
     compiled = [_compiled(t, info, lazy) for t in trees]
     ci = [n, max((c[2] for c in compiled), default=0), len(subgoals), 0, 0] + [0] * (3 * n)
     cf: list[float] = []
-    if rate is not None:
-        if len(rate.lo) != n or len(rate.hi) != n:
-            raise ValueError(f"rate targets: {len(rate.lo)} joint ranges for {n} trees")
-        ci[3:5] = [1, len(cf)]
-        cf += [float(rate.gain)] + [float(v) for pair in zip(rate.lo, rate.hi) for v in pair]
+    if law is not None:
+        if len(law.a) != n or len(law.b) != n:
+            raise ValueError(f"{law.mode} targets: {len(law.a)} joint entries for {n} trees")
+        ci[3:5] = [list(TARGET_MODES).index(law.mode), len(cf)]
+        cf += [float(law.gain)] + [float(v) for pair in zip(law.a, law.b) for v in pair]
     for sense, code, threshold in subgoals:
         ci += [int(sense), int(code), len(cf)]
         cf.append(float(threshold))
@@ -207,17 +216,17 @@ def _compiled(t, info: PsetInfo, lazy: bool):
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
-                 lazy: bool = True, subgoals=(), rate: RateTargets | None = None
+                 lazy: bool = True, subgoals=(), law: TargetLaw | None = None
                  ) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
-    as in :func:`compile_tree` (the eager form is for benchmarks); ``rate``
+    as in :func:`compile_tree` (the eager form is for benchmarks); ``law``
     as in :func:`encode_trees`.
     """
     if module is None:
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, rate) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law) for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)
