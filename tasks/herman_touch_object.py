@@ -34,6 +34,11 @@ class HermanTouchObject(HermanTask):
     params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
               "seconds": 1.5}
     bounds = {"target": (-1, 2)}
+    # The trees drive their joints' target *rates* (gpmotion.gp.bytecode.TargetLaw):
+    # a tree of the fingertip's error then settles on the object, where an angle
+    # target settles short by the servo's sag.  Session 9, 5 seeds each: target 0
+    # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5); docs/notes/herman.md.
+    gp_targets = "rate"
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
                   "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
