@@ -121,12 +121,13 @@ class Trajectory:
         ns, nseg = len(f.site_link), len(m.seg_link)
 
         def compute():
-            # site_pos is [n_sites, dims] even with no sites (figures.specparse)
-            p = self._points(np.concatenate([f.site_link, m.seg_link, m.seg_link]),
-                             np.concatenate([f.site_pos, m.seg_a, m.seg_b]))
-            seg = p[..., ns:, :]
-            return (np.ascontiguousarray(p[..., :ns, :]),
-                    np.stack([seg[..., :nseg, :], seg[..., nseg:, :]], axis=-2))
+            # site_pos is [n_sites, dims] even with no sites (figures.specparse);
+            # each capsule's two ends side by side, so both results are views
+            # of the one array (a herman generation's is ~100 MB: no copies)
+            ends = np.stack([m.seg_a, m.seg_b], axis=1).reshape(2 * nseg, -1)
+            p = self._points(np.concatenate([f.site_link, np.repeat(m.seg_link, 2)]),
+                             np.concatenate([f.site_pos, ends]))
+            return p[..., :ns, :], p[..., ns:, :].reshape(p.shape[:-2] + (nseg, 2, p.shape[-1]))
         return self._memo("_sites_segments", compute)
 
     def sites(self) -> np.ndarray:
