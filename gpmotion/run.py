@@ -128,7 +128,9 @@ def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDi
     head = (f"{verb} {cfg.task} ({cfg.family}, seed {cfg.seed}"
             f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}")
     own = "" if cfg.actuation else f", {family.name}'s default"
-    act = f"  actuation: {actuation}{own} · {search.total:,} generations"
+    note = family.banner_note()
+    act = (f"  actuation: {actuation}{own}{' · ' + note if note else ''} · "
+           f"{search.total:,} generations")
     return "\n".join([head, act, "  " + phase_line(task, search)])
 
 

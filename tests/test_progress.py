@@ -32,7 +32,7 @@ def test_banner_names_actuation_and_phase_schedule(tmp_path, capsys):
     assert main(["run", "lamp_hop", "--out", str(out), "--param", "seconds=0.3",
                  "--population", "8", "--generations", "11", "--no-artifacts"]) == 0
     err = capsys.readouterr().err
-    assert "actuation: pd, gp's default" in err
+    assert "actuation: pd, gp's default · trees give target angles ·" in err
     assert "style terms phase in over generations: late 2→5" in err
     assert "eta 116" not in err
     assert main(["run", "starman_travel", "--controller", "bsr-time", "--actuation", "pd",

@@ -91,6 +91,10 @@ class Family:
     def plot(self, path, genome) -> None:
         raise ValueError(f"a {self.name} controller has no structure to draw")
 
+    def banner_note(self) -> str:
+        """A short fact for a run's banner (e.g. GP's target mode); "" for none."""
+        return ""
+
     # -- search ----------------------------------------------------------------
     @classmethod
     def search_defaults(cls, task) -> dict:

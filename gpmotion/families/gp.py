@@ -222,6 +222,10 @@ class GPFamily(Family):
             bytecode.tokens_to_tree(t, self.info)
         return [list(t) for t in trees]
 
+    def banner_note(self) -> str:
+        return {"angle": "trees give target angles", "rate": "trees give target rates",
+                "pi": "trees give angles, PI-corrected"}[self.options["targets"]]
+
     def plot(self, path, genome) -> None:
         from ..treeplot import plot_trees
         names = [self.task.figure.actuator_names[i] for i in self.actuators]
