@@ -84,7 +84,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
             checkpoint_every=CHECKPOINT_S)
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
-    return {"config": name, "seed": seed, "targets": targets or "task default",
+    return {"config": name, "seed": seed, "targets": family.get("targets", "task default"),
             **({"search": search} if search else {}),
             **({"family": family} if family else {}),
             "success": bool(best["success"]),

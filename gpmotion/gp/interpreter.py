@@ -20,9 +20,9 @@ Semantics (identical to ``compile_reference`` and tests/reference):
   Jumps go forward only, so every tree finishes in at most n_ops steps.
 
 The stack lives in ``cstate`` (its first STACK_CAP slots), the subgoal
-flags after it, then rate mode's integrated targets: no allocation per step.  ``control`` updates the flags
-(latched: 1.0 once a subgoal's test on its sense has held) before it runs
-the trees.
+flags after it, then the rate and pi modes' state (TargetLaw): no
+allocation per step.  ``control`` updates the flags (latched: 1.0 once a
+subgoal's test on its sense has held) before it runs the trees.
 """
 from __future__ import annotations
 
