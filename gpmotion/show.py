@@ -1,7 +1,7 @@
 """``gpmotion show TASK``: everything a user needs to set up a run of a task."""
 from __future__ import annotations
 
-from .gp.opcodes import TARGET_MODES
+from .gp.targets import describe as describe_targets
 from .task import Task, get_task
 
 
@@ -77,5 +77,5 @@ def describe_task(name: str) -> str:
               _wrap("GP primitives (the task's set; --primitives to change)", task.primitives),
               _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
               f"GP search defaults: {gp_defaults or 'population 300, generations 40'}",
-              f"GP targets: {task.gp_targets} ({TARGET_MODES[task.gp_targets]}; --targets to change)"]
+              f"GP targets: {describe_targets(task.gp_targets)} (--targets to change)"]
     return "\n".join(lines)

@@ -44,7 +44,7 @@ from typing import ClassVar
 import numpy as np
 
 from .figures import load_figure
-from .gp.opcodes import TARGET_MODES
+from .gp import targets as gp_targets
 from .gp.primitives import STANDARD
 from .model import Figure, Scene, make_scene
 
@@ -137,7 +137,7 @@ class Task:
     dt: ClassVar[float] = 1e-3
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
     gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
-    gp_targets: ClassVar[str] = "angle"                  # what GP trees give: TARGET_MODES (--targets)
+    gp_targets: ClassVar[str] = "angle"                  # what GP trees give: gpmotion.gp.targets (--targets)
     curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
@@ -357,9 +357,10 @@ def register_task(cls: type[Task]) -> type[Task]:
     if (not isinstance(cls.primitives, tuple) or not cls.primitives
             or not all(isinstance(n, str) for n in cls.primitives)):
         raise ValueError(f"task {cls.name}: primitives must be a non-empty tuple of primitive names")
-    if cls.gp_targets not in TARGET_MODES:
-        raise ValueError(f"task {cls.name}: gp_targets must be one of {', '.join(TARGET_MODES)}, "
-                         f"got {cls.gp_targets!r}")
+    try:
+        gp_targets.parse(cls.gp_targets)
+    except ValueError as e:
+        raise ValueError(f"task {cls.name}: gp_targets: {e}") from None
     old = _TASKS.get(cls.id)
     if old is not None and inspect.getsourcefile(old) != inspect.getsourcefile(cls):
         raise ValueError(f"task {cls.id!r} defined twice: {inspect.getsourcefile(old)} "

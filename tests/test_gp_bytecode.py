@@ -22,7 +22,6 @@ from gpmotion.gp import primitives as registry
 from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, RATE_STATE, STACK_CAP,
                                   TargetLaw, encode_batch, encode_trees, tokens_to_tree,
                                   tree_to_tokens)
-from gpmotion.gp.opcodes import TARGET_MODES
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
 from gpmotion.gp.subgoals import MAX_SUBGOALS
@@ -191,7 +190,7 @@ def run_law(kernel, info, ind, acts, law, rng, steps=60, dt=0.002):
     funcs, selects = funcs_selects(info)
     batch = encode_batch([ind], info, acts, law=law)
     ci, cf = batch.ci[0], batch.cf[0]
-    assert ci[3] == list(TARGET_MODES).index(law.mode) and cf[ci[4]] == law.gain
+    assert ci[3] == 1 and list(cf[ci[4]: ci[4] + 4 * len(acts)]) == law.block()
     cstate = np.full(batch.cstate_size, 3.0)
     kernel.init(ci, cf, cstate)
     state = {}
@@ -210,7 +209,7 @@ def test_rate_targets_integrate_and_hold_within_the_joint_range(info, kernel, tr
     within [lo, hi]; the kernel agrees with the plain-Python twin step by step,
     and constant trees give the analytic ramp."""
     acts = [0, 2, 3]
-    law = TargetLaw("rate", 10.0, (-0.3, -1e6, -2.0), (0.3, 1e6, 2.0))   # tree 0's ramp reaches 0.3
+    law = TargetLaw(("rate",) * 3, (10.0,) * 3, (-0.3, -1e6, -2.0), (0.3, 1e6, 2.0))   # tree 0's ramp: 0.3
     consts = [tokens_to_tree([c], info) for c in (0.3, -0.7, 0.05)]
     rng = np.random.default_rng(4)
     for ind in (consts, trees[3:6], trees[9:12]):
@@ -221,7 +220,7 @@ def test_rate_targets_integrate_and_hold_within_the_joint_range(info, kernel, tr
                 assert np.allclose(got[acts], ramp, rtol=0, atol=1e-12), step
         assert abs(got[0]) <= 0.3 and abs(got[3]) <= 2.0
     with pytest.raises(ValueError, match="joint entries"):
-        encode_trees(consts, info, acts, law=TargetLaw("rate", 1.0, (0.0,), (1.0,)))
+        encode_trees(consts, info, acts, law=TargetLaw(("rate",), (1.0,), (0.0,), (1.0,)))
 
 
 def test_pi_targets_add_the_bounded_integral_of_the_angle_error(info, kernel, trees):
@@ -230,7 +229,7 @@ def test_pi_targets_add_the_bounded_integral_of_the_angle_error(info, kernel, tr
     a constant tree against a constant angle gives the analytic ramp."""
     acts = [0, 2, 3]
     angle = SENSES.index("angle_shoulder")
-    law = TargetLaw("pi", 5.0, (float(angle),) * 3, (0.05, 0.5, 0.5))
+    law = TargetLaw(("pi",) * 3, (5.0,) * 3, (float(angle),) * 3, (0.05, 0.5, 0.5))
     rng = np.random.default_rng(5)
     for ind in (trees[3:6], trees[12:15]):
         for _, got, _ in run_law(kernel, info, ind, acts, law, rng):
@@ -247,6 +246,23 @@ def test_pi_targets_add_the_bounded_integral_of_the_angle_error(info, kernel, tr
         want = [c + min(max(5.0 * (c - 0.2) * step * 0.01, -b), b)
                 for c, b in zip((0.3, -0.7, 0.05), law.b)]
         assert np.allclose(got[acts], want, rtol=0, atol=1e-12), step
+
+
+def test_each_tree_follows_its_own_mode(info, kernel, trees):
+    """Mixed modes (``rate,JOINT=angle,...``): one tree's target ramps, one is
+    its tree's output, one is PI-corrected, in one row; kernel and twin agree."""
+    acts = [0, 2, 3]
+    angle = SENSES.index("angle_shoulder")
+    law = TargetLaw(("rate", "angle", "pi"), (10.0, 0.0, 5.0), (-0.3, 0.0, float(angle)),
+                    (0.3, 0.0, 0.5))
+    rng = np.random.default_rng(6)
+    for ind in (trees[3:6], trees[6:9]):
+        for _, got, _ in run_law(kernel, info, ind, acts, law, rng):
+            assert abs(got[0]) <= 0.3
+    consts = [tokens_to_tree([c], info) for c in (0.3, -0.7, 0.05)]
+    for step, got, s in run_law(kernel, info, consts, acts, law, rng):
+        assert got[0] == pytest.approx(min(0.1 + 10.0 * 0.3 * step * 0.002, 0.3), abs=1e-12)
+        assert got[2] == -0.7                                    # the angle tree, as it is
 
 
 @pytest.mark.parametrize("tokens, senses, want", [

@@ -65,5 +65,39 @@ def test_the_mode_is_the_task_default_recorded_and_legacy_records_mean_angles():
     assert recorded_options("gp", {"targets": "rate"}) == {"targets": "rate"}
     assert recorded_options("gp", {}, {"targets": "rate"}) == {"targets": "rate"}
     assert recorded_options("gp", {"targets": "pi"}) == {"targets": "pi"}
-    with pytest.raises(ValueError, match="targets must be one of"):
+    with pytest.raises(ValueError, match="unknown mode 'velocity'"):
         make_family("gp", task, targets="velocity")
+    mixed = "rate,elbow_r=angle, wrist_r_y=angle"
+    assert make_family("gp", task, targets=mixed).config()["targets"] == mixed
+
+
+@pytest.mark.parametrize("spec, error", [
+    ("rate,knee_l=angle", "GP does not control: knee_l"),
+    ("rate,angle", "two modes for every joint"),
+    ("rate,elbow_r=angle,elbow_r=pi", "a joint named twice"),
+    ("=angle", "needs a joint"),
+    ("rate,elbow_r=fast", "unknown mode 'fast'"),
+    ("rate,", "unknown mode ''")])
+def test_a_bad_targets_spec_is_refused_by_name(spec, error):
+    with pytest.raises(ValueError, match=error):
+        make_family("gp", get_task("herman_touch_nose"), targets=spec)
+
+
+def test_per_joint_modes_rate_joints_settle_exactly_angle_joints_take_the_tree():
+    """``rate,elbow_r=angle,...``: the shoulder's rate trees (pose - angle)
+    settle on the pose under gravity; the elbow's and wrists' targets are
+    their trees' constants from the first step on."""
+    distal = ("elbow_r", "wrist_r_y", "wrist_r_x")
+    spec = "rate," + ",".join(f"{j}=angle" for j in distal)
+    got, want, traj = final_angles(spec, lambda n: [POSE[n]] if n in distal
+                                   else ["sub", POSE[n], f"angle_{n}"])
+    task = get_task("herman_touch_nose")
+    fam = make_family("gp", task, targets=spec)
+    names = [task.figure.actuator_names[i] for i in fam.actuators]
+    rate = [k for k, n in enumerate(names) if n not in distal]
+    assert np.abs(got[rate] - want[rate]).max() < 1e-3
+    for k, n in enumerate(names):
+        if n in distal:
+            assert np.allclose(traj.targets[0, :, fam.actuators[k]], POSE[n])
+    assert fam.banner_note() == ("trees give target rates, elbow_r: target angles, "
+                                 "wrist_r_y: target angles, wrist_r_x: target angles")

@@ -199,7 +199,8 @@ def test_each_task_owns_its_figure():
     ({"version": True}, "version must be an integer"),
     ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
     ({"primitives": ()}, "primitives must be a non-empty tuple"),
-    ({"gp_targets": "velocity"}, "gp_targets must be"),
+    ({"gp_targets": "velocity"}, "gp_targets: .*unknown mode 'velocity'"),
+    ({"gp_targets": 3}, "gp_targets: GP targets must be a mode"),
     ({"terms": (Term("x", 1.0, main=True, param="w_x"),)}, r"unknown parameter\(s\) \['w_x'\]"),
 ])
 def test_register_task_rejects_bad_declarations(attrs, message):

@@ -16,7 +16,7 @@ from deap import gp
 from .. import cli_options
 from ..cli_options import Option, number
 from ..gp import bytecode
-from ..gp.opcodes import TARGET_MODES
+from ..gp import targets as gp_targets
 from ..gp.operators import random_tree
 from ..gp.primitives import CLAMP
 from ..gp.pset import build_pset
@@ -61,6 +61,11 @@ def _range(flag, text):
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and max(-lo, hi) <= 1e6):
         raise ValueError(f"{flag}: need finite LO < HI within ±1e6, got {text!r}")
     return [lo, hi]
+
+
+def _targets(flag, text):
+    gp_targets.parse(text)             # syntax and mode names; joints are checked by the family
+    return text.strip()
 
 
 def _kinematic_only(args, family):
@@ -108,8 +113,10 @@ _OWN = dict([
                "what a GP tree's output is: its joint's target angle (angle); the "
                "target's rate of change (rate: integral action); or the joint's angle "
                "reached without the PD servo's sag under gravity (pi: an integral term "
-               "corrects the target); default: the task's choice (gpmotion show TASK)",
-               "the GP target mode", dict(choices=list(TARGET_MODES))),
+               "corrects the target).  One mode for every joint, or per joint: "
+               "MODE,JOINT=MODE,... e.g. rate,elbow_r=angle; default: the task's choice "
+               "(gpmotion show TASK)",
+               "the GP target mode", dict(type=str, metavar="MODE[,JOINT=MODE...]"), _targets),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
                "the GP target time constant", dict(type=float), number(0.002, 10),
@@ -117,24 +124,26 @@ _OWN = dict([
 ])
 
 
-def target_law(task, actuators, mode: str) -> bytecode.TargetLaw | None:
-    """The law of a target mode (None for angles): rate mode's gain and each
-    joint's range (targets stay inside); pi mode's gain, each joint's angle
-    sense and the integral's bound."""
-    if mode == "angle":
-        return None
+def target_law(task, actuators, spec: str) -> bytecode.TargetLaw | None:
+    """The law of a targets spec (gpmotion.gp.targets; None when every tree
+    gives an angle): a rate joint's gain and range (its target stays inside),
+    a pi joint's gain, angle sense and the integral's bound."""
     fig, m = task.figure, task.figure.model
-    if mode == "rate":
-        dof = m.act_dof[list(actuators)]
-        lo, hi = np.maximum(m.lo[dof], -CLAMP), np.minimum(m.hi[dof], CLAMP)   # a free joint: ±CLAMP
-        return bytecode.TargetLaw("rate", RATE_GAIN, tuple(map(float, lo)), tuple(map(float, hi)))
-    names = [f"angle_{fig.actuator_names[a]}" for a in actuators]
-    missing = [n for n in names if n not in fig.sense_names]
+    names = [fig.actuator_names[a] for a in actuators]
+    modes = gp_targets.joint_modes(spec, names)
+    if set(modes) == {"angle"}:
+        return None
+    missing = [n for n, md in zip(names, modes) if md == "pi" and f"angle_{n}" not in fig.sense_names]
     if missing:
-        raise ValueError(f"GP targets pi need each controlled joint's angle sense; "
-                         f"{fig.name} has no {', '.join(missing)}")
-    return bytecode.TargetLaw("pi", PI_GAIN, tuple(float(fig.sense_names.index(n)) for n in names),
-                              (PI_BOUND,) * len(names))
+        raise ValueError(f"GP targets pi need each such joint's angle sense; "
+                         f"{fig.name} has no {', '.join('angle_' + n for n in missing)}")
+    dof = m.act_dof[list(actuators)]
+    lo, hi = np.maximum(m.lo[dof], -CLAMP), np.minimum(m.hi[dof], CLAMP)   # a free joint: ±CLAMP
+    law = {"angle": lambda k: (0.0, 0.0, 0.0),
+           "rate": lambda k: (RATE_GAIN, float(lo[k]), float(hi[k])),
+           "pi": lambda k: (PI_GAIN, float(fig.sense_names.index(f"angle_{names[k]}")), PI_BOUND)}
+    rows = [law[md](k) for k, md in enumerate(modes)]
+    return bytecode.TargetLaw(modes, *(tuple(col) for col in zip(*rows)))
 
 
 def _check_erc_range(r):
@@ -179,8 +188,6 @@ class GPFamily(Family):
                                flag_names=[g.name for g in goals])
         self.actuators = task.controlled_actuators()
         self.options["targets"] = targets = targets or task.gp_targets
-        if targets not in TARGET_MODES:
-            raise ValueError(f"GP targets must be one of {', '.join(TARGET_MODES)}, got {targets!r}")
         self.law = target_law(task, self.actuators, targets)
 
     @property
@@ -223,8 +230,7 @@ class GPFamily(Family):
         return [list(t) for t in trees]
 
     def banner_note(self) -> str:
-        return {"angle": "trees give target angles", "rate": "trees give target rates",
-                "pi": "trees give angles, PI-corrected"}[self.options["targets"]]
+        return gp_targets.note(self.options["targets"])
 
     def plot(self, path, genome) -> None:
         from ..treeplot import plot_trees

@@ -8,11 +8,10 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
     ci[0]            n_trees
     ci[1]            max stack need over the trees (<= STACK_CAP)
     ci[2]            n_flags: subgoal flags (gpmotion.gp.subgoals)
-    ci[3]            target mode: 0 "angle" (a tree's output is its joint's
-                     target angle), 1 "rate" (the output times a gain is the
-                     target's rate of change), 2 "pi" (the output is the
-                     angle, reached through an integral term): TargetLaw
-    ci[4]            modes 1, 2: offset in cf of [gain, a_0, b_0, a_1, ...]
+    ci[3]            1 when some tree does not give its joint's target angle
+                     (a TargetLaw: rate or pi targets, gpmotion.gp.targets), else 0
+    ci[4]            ci[3] == 1: offset in cf of the law block, LAW_WIDTH numbers
+                     a tree: [mode code (index in TARGET_MODES), gain, a, b]
     ci[5 + 3k + 0]   actuator index driven by tree k
     ci[5 + 3k + 1]   start offset in ci of tree k's op stream
     ci[5 + 3k + 2]   number of ops of tree k
@@ -29,9 +28,9 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
                      through the jump table that follows (``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
-interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (modes
-1, 2) the previous step's time, a started flag and one value per tree (the
-target; the integral).
+interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (with a
+law) the previous step's time, a started flag and one value per tree (rate:
+the target; pi: the integral).
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
 prefix list of primitive names, terminal names and numbers (constants).
@@ -62,19 +61,25 @@ MAX_TREE_DEPTH = 17     # Koza's depth limit
 
 @dataclass(frozen=True)
 class TargetLaw:
-    """How the trees drive their targets when not as angles (ci[3] = the code
-    of ``mode`` in TARGET_MODES), with two numbers a_k, b_k per tree:
+    """How each tree drives its target (one entry per tree in every field):
+    ``modes[k]`` one of TARGET_MODES, with a gain and two numbers a_k, b_k:
 
+    * ``angle``: target_k = tree_k (gain, a, b unused).
     * ``rate``: target_k += dt * gain * tree_k, held within [a_k, b_k] (the
-      joint's range, so a target never winds up past a limit); each target
-      starts at its joint's neutral angle.
+      joint's range, so a target never winds up past a limit); the target
+      starts where the caller put it (its joint's neutral angle).
     * ``pi``: target_k = tree_k + I_k with I_k += dt * gain * (tree_k -
       senses[a_k]) (a_k: the joint's angle sense), |I_k| <= b_k: the tree's
       angle reached without the PD servo's sag (a PI servo)."""
-    mode: str
-    gain: float
+    modes: tuple[str, ...]
+    gain: tuple[float, ...]
     a: tuple[float, ...]
     b: tuple[float, ...]
+
+    def block(self) -> list[float]:
+        """The law block of cf: LAW_WIDTH numbers a tree."""
+        codes = [float(list(TARGET_MODES).index(m)) for m in self.modes]
+        return [float(v) for row in zip(codes, self.gain, self.a, self.b) for v in row]
 
 
 def is_erc(node) -> bool:
@@ -177,10 +182,10 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
     ci = [n, max((c[2] for c in compiled), default=0), len(subgoals), 0, 0] + [0] * (3 * n)
     cf: list[float] = []
     if law is not None:
-        if len(law.a) != n or len(law.b) != n:
-            raise ValueError(f"{law.mode} targets: {len(law.a)} joint entries for {n} trees")
-        ci[3:5] = [list(TARGET_MODES).index(law.mode), len(cf)]
-        cf += [float(law.gain)] + [float(v) for pair in zip(law.a, law.b) for v in pair]
+        if not len(law.modes) == len(law.gain) == len(law.a) == len(law.b) == n:
+            raise ValueError(f"target law: {len(law.modes)} joint entries for {n} trees")
+        ci[3:5] = [1, len(cf)]
+        cf += law.block()
     for sense, code, threshold in subgoals:
         ci += [int(sense), int(code), len(cf)]
         cf.append(float(threshold))

@@ -81,28 +81,31 @@ def update_flags_ref(ci, cf, senses, flags):
 def control_ref(ci, cf, senses, targets, funcs, selects=None, flags=None, t=0.0, rate=None):
     """One control step at time ``t``; ``flags`` (a list) and ``rate`` (a dict:
     the previous time and one value per tree) are kept by the caller across
-    steps.  ci[3] == 1 (rate): target += (t - previous t) * gain * tree output,
-    held within [a, b] (the joint's range), starting at the caller's target;
-    ci[3] == 2 (pi): target = tree output + I, I += (t - previous t) * gain *
+    steps.  ci[3] == 1: each tree k has a law row cf[ci[4] + 4k : +4] =
+    (mode, gain, a, b): mode 0 (angle) target = output; 1 (rate) target +=
+    (t - previous t) * gain * output, held within [a, b], starting at the
+    caller's target; 2 (pi) target = output + I, I += (t - previous t) * gain *
     (output - senses[a]), |I| <= b, I starting at 0."""
     flags = [0.0] * int(ci[2]) if flags is None else flags
     update_flags_ref(ci, cf, senses, flags)
-    n, mode = int(ci[0]), int(ci[3])
+    n = int(ci[0])
     acts = [int(ci[HEADER + 3 * k]) for k in range(n)]
     outs = [run_tree_ref(ci, cf, k, senses, funcs, selects, flags=flags) for k in range(n)]
-    if mode not in (1, 2):
+    if int(ci[3]) == 0:
         for a, v in zip(acts, outs):
             targets[a] = v
         return
+    rows = [tuple(cf[int(ci[4]) + 4 * k: int(ci[4]) + 4 * k + 4]) for k in range(n)]
     rate = {} if rate is None else rate
     if "t" not in rate:
-        rate["t"], rate["v"] = t, [targets[a] if mode == 1 else 0.0 for a in acts]
+        rate["t"], rate["v"] = t, [targets[a] if r[0] == 1 else 0.0 for a, r in zip(acts, rows)]
     h, rate["t"] = t - rate["t"], t
-    g = int(ci[4])
-    for k, (act, out) in enumerate(zip(acts, outs)):
-        a, b, v = cf[g + 1 + 2 * k], cf[g + 2 + 2 * k], rate["v"][k]
+    for k, (act, out, (mode, gain, a, b)) in enumerate(zip(acts, outs, rows)):
+        v = rate["v"][k]
         if mode == 1:
-            rate["v"][k] = targets[act] = min(max(v + h * cf[g] * out, a), b)
-        else:
-            rate["v"][k] = min(max(v + h * cf[g] * (out - senses[int(a)]), -b), b)
+            rate["v"][k] = targets[act] = min(max(v + h * gain * out, a), b)
+        elif mode == 2:
+            rate["v"][k] = min(max(v + h * gain * (out - senses[int(a)]), -b), b)
             targets[act] = out + rate["v"][k]
+        else:
+            targets[act] = out
