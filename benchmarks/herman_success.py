@@ -138,7 +138,7 @@ def main(argv=None):
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--only", default="", help="comma list of: " + ", ".join({**CONFIGS, **EXTRA}))
     ap.add_argument("--out", default="herman_success.jsonl", help="results, one run a line (resumable)")
-    ap.add_argument("--targets", choices=["angle", "rate", "pi"], default=None,
+    ap.add_argument("--targets", default=None, metavar="MODE[,JOINT=MODE...]",
                     help="GP target mode for every run (default: each task's own)")
     ap.add_argument("--search", action="append", default=[], metavar="KEY=VALUE",
                     help="a GP search setting for every run, e.g. selection=tournament "

@@ -18,6 +18,13 @@ earlier stages); the episode starts from the final state of running them in
 series from the standing start (gpmotion.compose carries the state across
 each switch), as Rex learns to turn "given the final state of that walk".
 
+``hold`` (s, default 0): the controller runs this much longer than
+``seconds``; every term but ``fall`` is measured at ``seconds`` and ``fall``
+over the whole episode, so a motion that is falling when ``seconds`` end
+(a lunge that "walks" 1 m by toppling just after the last frame) fails.  A
+stage handed on by ``after`` runs its whole episode, so the next stage
+starts from a state its own controller kept upright for ``hold`` seconds.
+
 This module starts with ``_``: the plugin loader does not import it as a task.
 """
 from __future__ import annotations
@@ -47,28 +54,32 @@ FACTS = {
 
 
 def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX_TILT,
-                      min_height=s3.MIN_HEIGHT) -> dict[str, np.ndarray]:
+                      min_height=s3.MIN_HEIGHT, frames=None) -> dict[str, np.ndarray]:
     """Every term above for a batch.  ``feet``: the foot contact points' names
     (any other point on the ground means a fall); ``foot_sites``: a site per
     foot; ``foot_groups``: for a biped, the contact points of each foot;
-    ``max_tilt`` (rad), ``min_height`` (fraction): the fall thresholds."""
+    ``max_tilt`` (rad), ``min_height`` (fraction): the fall thresholds;
+    ``frames``: measure all but ``fall`` and ``fell`` over the first
+    ``frames`` frames only (``hold``; default all)."""
     fig = traj.figure
     base = traj.base()
     quat = base[..., 3:7]
     yaw = s3.heading(quat)
-    d = s3.in_start_frame(traj.com[..., :2], yaw[..., 0])
     other = [k for k, n in enumerate(fig.contact_names) if n not in feet]
     fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other],
                      max_tilt, min_height)
-    out = {"distance": d[..., -1, 0], "sideways": np.abs(d[..., -1, 1]),
-           "fall": s3.fall_fraction(fell), "rotation": s3.net_rotation(yaw),
-           "turn": s3.net_rotation(yaw), "fell": fell[..., -1].astype(np.float64)}
+    out = {"fall": s3.fall_fraction(fell), "fell": fell[..., -1].astype(np.float64)}
+    cut = slice(None, frames)
+    yaw, fell = yaw[..., cut], fell[..., cut]
+    d = s3.in_start_frame(traj.com[..., cut, :2], yaw[..., 0])
+    out.update({"distance": d[..., -1, 0], "sideways": np.abs(d[..., -1, 1]),
+                "rotation": s3.net_rotation(yaw), "turn": s3.net_rotation(yaw)})
     if foot_sites:
-        xy = traj.sites()[..., [fig.site_names.index(n) for n in foot_sites], :2]
+        xy = traj.sites()[..., cut, [fig.site_names.index(n) for n in foot_sites], :2]
         out["feet_forward"] = s3.feet_forward(xy, yaw[..., 0])
         if len(foot_groups) == 2:
             fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
-            force = np.stack([traj.contact_force[..., [fig.contact_names.index(n) for n in g]].sum(-1)
+            force = np.stack([traj.contact_force[..., cut, [fig.contact_names.index(n) for n in g]].sum(-1)
                               for g in foot_groups], -1)
             out["steps"] = s3.count_steps(force, fwd, fell, yaw).astype(np.float64)
     return out
@@ -86,13 +97,23 @@ class CreatureTask(Task):
     param_docs = {"seconds": "episode length (s)",
                   "w_sideways": "penalty per m of sideways com motion",
                   "w_fall": "penalty for falling (× fraction of the episode fallen)",
-                  "after": "start from the end of these saved controllers (comma-separated files)"}
+                  "after": "start from the end of these saved controllers (comma-separated files)",
+                  "hold": "the controller runs this much longer (s); all but the fall term "
+                          "are measured at `seconds`, the fall over the whole episode"}
     _start = None
+
+    @property
+    def seconds(self) -> float:
+        """The episode: the motion's ``seconds`` and the ``hold`` after it."""
+        return float(self.params["seconds"]) + float(self.params.get("hold", 0.0))
 
     def validate(self):
         after = self.params.get("after", "")
         if not isinstance(after, str):
             raise ValueError(f"task {self.name}: after must be a comma-separated list of controller files")
+        hold = self.params.get("hold", 0.0)
+        if isinstance(hold, bool) or not isinstance(hold, (int, float)) or not 0 <= hold <= 60:
+            raise ValueError(f"task {self.name}: hold must be a number of seconds in [0, 60], got {hold!r}")
 
     def initial_state(self):
         if not self.params.get("after"):
@@ -103,8 +124,11 @@ class CreatureTask(Task):
         return q.copy(), qd.copy()
 
     def measure(self, traj):
+        frames = None
+        if self.params.get("hold"):
+            frames = int(round(float(self.params["seconds"]) / (self.dt * self.record_every))) + 1
         return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups,
-                                 self.max_tilt, self.min_height)
+                                 self.max_tilt, self.min_height, frames)
 
     def describe(self, traj, m, e=0):
         return [", ".join(FACTS[f](m, e) for f in self.facts)]

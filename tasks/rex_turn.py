@@ -24,3 +24,12 @@ class RexTurn(RexTask):
 
     def success(self, traj, m):
         return (m["turn"] >= np.radians(self.params["success_degrees"])) & (m["fall"] == 0)
+
+
+@register_task
+class RexTurnV2(RexTurn):
+    """v2: the turn must leave Rex upright for 1 s more (``hold``, as
+    rex_walk-v2), so the second walk starts from a state he can walk on."""
+    version = 2
+    params = {**RexTurn.params, "hold": 1.0}
+    success_threshold = "heading changes ≥ 45° in 3 s, never fallen in 4 s"

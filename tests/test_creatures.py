@@ -309,7 +309,8 @@ def test_bsr_families_score_creature_tasks_deterministically(task, family):
     a, b = ev.evaluate(gs), ev.evaluate(gs)
     assert np.all(np.isfinite(a.costs)) and np.array_equal(a.costs, b.costs)
     if family == "bsr-sense":
-        assert a.extras[0].shape == (26, fam.senses3d.plan.n_senses)
+        frames = t.n_steps // t.record_every + 1       # 0.5 s (+ rex's 1 s hold)
+        assert a.extras[0].shape == (frames, fam.senses3d.plan.n_senses)
 
 
 def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
@@ -350,3 +351,24 @@ def test_creature_reports_read_their_facts_in_order():
         f"heading change 90°, forward 1.23 m, {fallen}"]
     assert gpmotion.get_task("bob_walk").describe(None, m) == [
         f"3 forward steps, forward 1.23 m, sideways 0.05 m, rotation 45°, {fallen}"]
+
+
+def test_a_walk_that_topples_after_its_last_frame_fails_rex_walk_v2():
+    """rex_walk-v1 took a lunge for a walk: this controller (seed 0, 10,000
+    evaluations) covers 1.07 m in 3 s upright and topples 0.1 s later.  v2
+    runs it 1 s longer (``hold``): the distance is still taken at 3 s (the
+    same number), the fall is not forgiven, and it no longer solves."""
+    from gpmotion.replay import load_controller, replay_genome
+    path = Path(__file__).parent / "data" / "rex_walk_v1_lunge.json"
+    v1, fam1, act, genome, _ = load_controller(path)
+    assert v1.id == "rex_walk-v1" and v1.seconds == 3.0
+    _, _, m1, ok1 = replay_genome(v1, fam1, act, genome)
+    v2 = gpmotion.get_task("rex_walk")
+    assert v2.id == "rex_walk-v2" and v2.seconds == 4.0 and v2.n_steps == 4000
+    traj, _, m2, ok2 = replay_genome(v2, make_family(fam1.name, v2, **fam1.options), act, genome)
+    assert ok1[0] and m1["distance"][0] >= 1.0 and m1["fall"][0] == 0
+    assert m2["distance"][0] == pytest.approx(m1["distance"][0], abs=1e-9)
+    assert m2["fall"][0] > 0.1 and not ok2[0]
+    assert traj.q.shape[1] == 4000 // v2.record_every + 1
+    with pytest.raises(ValueError, match="hold must be"):
+        gpmotion.get_task("rex_walk", hold=-1.0)
