@@ -26,6 +26,7 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-height     + max_height                              [hop]
   beryl-tumble    Beryl, time-based, t_per = T, + rotations (w 4)        [tumble, Fig. 11]
   beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
+  star-contact-w4, beryl-periodic-w4  the two contact_distance ones at weight 4
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
 Runs are queued seed-major (every configuration's seed 0 first), so a study
@@ -68,6 +69,14 @@ CONFIGS = {
                        {"t_per": 0.5, "bsr_dt": 0.1},
                        ("periodic shuffle",),
                        "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    # contact_distance weighted 4: at 2 and 40,000 evaluations a 6.5 m hop
+    # (cost -12.1) beat a 2.4 m periodic shuffle (-11.3) on Beryl, and
+    # Star-Man's best were shuffles with one 40-80 ms flight
+    "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
+                        ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
+    "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},
+                          {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                          "Beryl time-based, t_per = 0.5 s, + contact_distance (w 4), τ ≥ 0.2 s"),
     # the paper's Beryl configurations name no secondary term; unguided, ours hops
     "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
                               "Beryl time-based, t_per = T, unguided"),
