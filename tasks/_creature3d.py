@@ -9,6 +9,7 @@ each task weights them):
 * ``sideways``      |com displacement across it| at the end (m)
 * ``fall``          fraction of the episode spent fallen (gpmotion.bsr.secondary3d)
 * ``rotation``      |net rotation about the vertical| (rad)
+* ``facing``        mean |heading − start heading| over the episode (rad)
 * ``feet_forward``  mean forward displacement of the feet (m)
 * ``turn``          |change of heading| (rad)
 * ``steps``         forward steps before the first fall (bipeds)
@@ -48,6 +49,7 @@ FACTS = {
     "sideways": lambda m, e: f"sideways {m['sideways'][e]:.2f} m",
     "heading": lambda m, e: f"heading change {np.degrees(m['turn'][e]):.0f}°",
     "rotation": lambda m, e: f"rotation {np.degrees(m['rotation'][e]):.0f}°",
+    "facing": lambda m, e: f"facing {np.degrees(m['facing'][e]):.0f}° away on average",
     "steps": lambda m, e: f"{int(m['steps'][e])} forward steps",
     "fallen": lambda m, e: f"fallen {100 * m['fall'][e]:.0f}% of the time",
 }
@@ -73,7 +75,8 @@ def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX
     yaw, fell = yaw[..., cut], fell[..., cut]
     d = s3.in_start_frame(traj.com[..., cut, :2], yaw[..., 0])
     out.update({"distance": d[..., -1, 0], "sideways": np.abs(d[..., -1, 1]),
-                "rotation": s3.net_rotation(yaw), "turn": s3.net_rotation(yaw)})
+                "rotation": s3.net_rotation(yaw), "turn": s3.net_rotation(yaw),
+                "facing": s3.facing_away(yaw)})
     if foot_sites:
         xy = traj.sites()[..., cut, [fig.site_names.index(n) for n in foot_sites], :2]
         out["feet_forward"] = s3.feet_forward(xy, yaw[..., 0])

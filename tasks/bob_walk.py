@@ -37,3 +37,24 @@ class BobWalk(CreatureTask):
 
     def success(self, traj, m):
         return m["steps"] >= self.params["success_steps"]
+
+
+@register_task
+class BobWalkV2(BobWalk):
+    """v2: walk facing forward, and do not fall for distance.  With v1's
+    fitness every search (time- and sense-based, 10,000 evaluations) found
+    one of two things that earn distance without steps that count: a lunge
+    that falls (sense-based: 1.8-2.1 m, fallen 49-61 % of the episode, since
+    a fall cost only 2 × that fraction) or a waddle whose pelvis swings ±50°
+    at each step (time-based: 7 alternating steps in 4 s, 1 of them within
+    45° of forward), which v1's net-rotation term does not see.  v2 weights
+    a fall as rex_walk does (10) and penalizes the mean angle between the
+    heading and the start heading over the whole episode (``facing``), the
+    footnote's "more conventional forward-facing walking"; success as v1."""
+    version = 2
+    params = {**BobWalk.params, "w_fall": 10.0, "w_facing": 1.0}
+    param_docs = {**BobWalk.param_docs,
+                  "w_facing": "penalty per rad of mean |heading − start heading|"}
+    terms = (*BobWalk.terms,
+             Term("facing", 1.0, param="w_facing", doc="mean |heading − start heading| (rad)"))
+    facts = ("steps", "forward", "sideways", "facing", "fallen")

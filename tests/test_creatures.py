@@ -372,3 +372,28 @@ def test_a_walk_that_topples_after_its_last_frame_fails_rex_walk_v2():
     assert traj.q.shape[1] == 4000 // v2.record_every + 1
     with pytest.raises(ValueError, match="hold must be"):
         gpmotion.get_task("rex_walk", hold=-1.0)
+
+
+def test_facing_away_is_the_mean_heading_error_and_sees_a_waddle():
+    from gpmotion.bsr import secondary3d as s3
+    t = np.linspace(0.0, 4.0, 4001)
+    waddle = 0.9 * np.sin(2 * np.pi * t)                 # ±52°, net rotation 0
+    assert s3.net_rotation(waddle) == pytest.approx(0.0, abs=1e-12)
+    assert s3.facing_away(waddle) == pytest.approx(2 * 0.9 / np.pi, rel=1e-3)   # mean |A sin|
+    assert s3.facing_away(np.full(5, 0.3)) == 0.0
+
+
+def test_bob_walk_v2_charges_the_waddle_v1_did_not_see():
+    """This bsr-time controller (bob_walk-v1, seed 1, 10,000 evaluations) steps
+    L R L R L R L but swings its pelvis ±50°: v1 counts 1 step and charges
+    14° of net rotation; v2 charges the mean heading error as well."""
+    from gpmotion.replay import load_controller, replay_genome
+    v1, fam1, act, genome, _ = load_controller(Path(__file__).parent / "data" / "bob_walk_v1_waddle.json")
+    assert v1.id == "bob_walk-v1"
+    _, c1, m1, _ = replay_genome(v1, fam1, act, genome)
+    v2 = gpmotion.get_task("bob_walk")
+    _, c2, m2, _ = replay_genome(v2, make_family(fam1.name, v2, **fam1.options), act, genome)
+    assert m1["steps"][0] == 1 and np.degrees(m1["rotation"][0]) < 20
+    assert np.degrees(m2["facing"][0]) > 15
+    extra = 1.0 * m2["facing"] + (10.0 - 2.0) * m2["fall"]          # v2's added charges
+    assert c2[0] == pytest.approx(c1[0] + extra[0], rel=1e-9)

@@ -80,6 +80,14 @@ def net_rotation(yaw) -> np.ndarray:
     return np.abs(yaw[..., -1] - yaw[..., 0])
 
 
+def facing_away(yaw) -> np.ndarray:
+    """Mean |heading − start heading| over the episode (rad) [...]: a figure
+    that waddles, swinging ±50° about a net heading of 0, scores 0 on
+    ``net_rotation`` but not here."""
+    yaw = np.asarray(yaw, dtype=np.float64)
+    return np.abs(yaw - yaw[..., :1]).mean(axis=-1)
+
+
 def feet_forward(feet_xy, yaw0) -> np.ndarray:
     """Mean forward displacement [...] of the feet [..., F, n_feet, 2]."""
     feet = np.moveaxis(np.asarray(feet_xy, np.float64), -2, -3)      # [..., n_feet, F, 2]
