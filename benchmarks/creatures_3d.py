@@ -21,7 +21,7 @@
   across each switch); prints each stage's numbers and whether the whole
   sequence completes (walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m, never fallen).
 * ``speed``: one time-based Rex walk search until its first acceptable
-  controller (``rex_walk`` solved: ≥ 1 m without falling); wall and CPU
+  controller (``rex_walk`` solved: its success threshold); wall and CPU
   seconds and evaluations.
 * ``mujoco``: the 3-D kernel against MuJoCo's C rollout on each creature
   (``benchmarks/compare_mujoco.py --only creatures``).
@@ -140,7 +140,7 @@ def speed(a) -> int:
               f"{f['cpu_s']:.0f} s CPU)")
     else:
         n, wall, cpu = f["first_success"]
-        print(f"first acceptable Rex walk (≥ 1 m, never fallen) after {n} evaluations: "
+        print(f"first acceptable Rex walk ({task.id}: {task.success_threshold}) after {n} evaluations: "
               f"{wall:.0f} s wall, {cpu:.0f} s CPU ({cpu / n * 1e3:.1f} ms CPU per 3 s evaluation); "
               f"bar ≤ 300 s: {'met' if wall <= 300 else 'NOT met'}")
     return 0
