@@ -343,14 +343,17 @@ def test_creature_weights_are_parameters_and_validate_is_pure(name, param):
 
 def test_creature_reports_read_their_facts_in_order():
     m = {"distance": np.array([1.234]), "sideways": np.array([0.05]), "turn": np.array([np.pi / 2]),
-         "rotation": np.array([np.pi / 4]), "steps": np.array([3.0]), "fall": np.array([0.25])}
+         "rotation": np.array([np.pi / 4]), "steps": np.array([3.0]), "fall": np.array([0.25]),
+         "facing": np.array([np.pi / 6])}
     fallen = "fallen 25% of the time"
     assert gpmotion.get_task("rex_walk").describe(None, m) == [
         f"forward 1.23 m, sideways 0.05 m, heading change 90°, 3 forward steps, {fallen}"]
     assert gpmotion.get_task("rex_turn").describe(None, m) == [
         f"heading change 90°, forward 1.23 m, {fallen}"]
-    assert gpmotion.get_task("bob_walk").describe(None, m) == [
+    assert gpmotion.get_task("bob_walk-v1").describe(None, m) == [
         f"3 forward steps, forward 1.23 m, sideways 0.05 m, rotation 45°, {fallen}"]
+    assert gpmotion.get_task("bob_walk").describe(None, m) == [
+        f"3 forward steps, forward 1.23 m, sideways 0.05 m, facing 30° away on average, {fallen}"]
 
 
 def test_a_walk_that_topples_after_its_last_frame_fails_rex_walk_v2():
