@@ -244,7 +244,16 @@ class Task:
     # ---- the harness uses these ------------------------------------------
     @property
     def seconds(self) -> float:
+        """The episode's length."""
         return float(self.params["seconds"])
+
+    @property
+    def motion_seconds(self) -> float:
+        """How long the task's motion lasts: as a phase of a composite (and as
+        an earlier stage of ``after``) a controller runs this long.  The episode
+        by default; a task that scores a settling time past its motion (the
+        creatures' ``hold``) hands over at the motion's end."""
+        return self.seconds
 
     @property
     def n_steps(self) -> int:

@@ -324,7 +324,10 @@ def test_a_stage_starts_where_the_previous_stage_ended(tmp_path):
     end = ev.rollout([g])
     turn = gpmotion.get_task("rex_turn", after=str(path))
     q0, qd0 = turn.initial_state()
-    assert np.allclose(q0, end.q[0, -1]) and np.allclose(qd0, end.qd[0, -1])
+    k = round(0.5 / (walk.dt * walk.record_every))       # the walk's motion ends at 0.5 s;
+    assert walk.seconds == 1.5 and walk.motion_seconds == 0.5     # its 1 s hold is not handed on
+    assert np.allclose(q0, end.q[0, k]) and np.allclose(qd0, end.qd[0, k])
+    assert not np.allclose(q0, end.q[0, -1])
     with pytest.raises(ValueError, match="after"):
         gpmotion.get_task("rex_turn", after=str(tmp_path / "missing.json")).initial_state()
 

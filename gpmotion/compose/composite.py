@@ -147,7 +147,7 @@ def from_controllers(paths, switches=None, seconds=None, scene: dict | None = No
 def assemble(parts: list[Part], switches=None, seconds=None, scene: dict | None = None,
              phase_scenes: list | None = None) -> Composite:
     _check_parts(parts)
-    own = np.cumsum([p.task.seconds for p in parts])
+    own = np.cumsum([p.task.motion_seconds for p in parts])
     seconds = float(own[-1] if seconds is None else seconds)
     tick = parts[0].task.dt * parts[0].task.record_every
     if not (np.isfinite(seconds) and tick <= seconds <= 600):
