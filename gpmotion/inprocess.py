@@ -33,6 +33,7 @@ class InProcessEvaluator:
         self.actuation = self.actuation or self.family.default_actuation
         self._scenes = {}                     # task phase -> scene (a curriculum moves it)
         self._q0, self._qd0 = self.task.initial_state()
+        self._contact0 = self.task.initial_contact()
 
     def scene(self, progress: float = 1.0):
         key = self.task.staged(progress)
@@ -43,7 +44,7 @@ class InProcessEvaluator:
     def rollout(self, genomes, record_senses=False, progress: float = 1.0):
         batch = self.family.encode(genomes)
         return rollout(self.task.figure, self.scene(progress), batch, n_steps=self.task.n_steps,
-                       q0=self._q0, qd0=self._qd0, dt=self.task.dt,
+                       q0=self._q0, qd0=self._qd0, contact0=self._contact0, dt=self.task.dt,
                        record_every=self.task.record_every, actuation=self.actuation,
                        default_tau=self.family.default_tau,
                        record_senses=record_senses or self.family.needs_senses,

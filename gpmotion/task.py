@@ -229,6 +229,13 @@ class Task:
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
         return self.figure.q_default.copy(), np.zeros(self.figure.nv)
 
+    def initial_contact(self) -> np.ndarray | None:
+        """The contacts' friction-anchor state at the start ([nc, k], a
+        Trajectory's ``contact_end``), or None: no contact yet.  A task that
+        continues another motion returns where that motion left it, so the
+        start is the whole physical state, as a composite carries it."""
+        return None
+
     def measure(self, traj) -> dict[str, np.ndarray]:
         """Raw value of every term, each an array over episodes."""
         raise NotImplementedError

@@ -130,10 +130,18 @@ class CreatureTask(Task):
     def initial_state(self):
         if not self.params.get("after"):
             return super().initial_state()
+        q, qd, _ = self._stage_end()
+        return q.copy(), qd.copy()
+
+    def initial_contact(self):
+        if not self.params.get("after"):
+            return None
+        return self._stage_end()[2].copy()
+
+    def _stage_end(self):
         if self._start is None:
             self._start = stage_end([s.strip() for s in self.params["after"].split(",") if s.strip()])
-        q, qd = self._start
-        return q.copy(), qd.copy()
+        return self._start
 
     def measure(self, traj):
         frames = None
@@ -155,9 +163,10 @@ class CreatureTask(Task):
                 + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])
 
 
-def stage_end(paths) -> tuple[np.ndarray, np.ndarray]:
-    """Final (q, qd) of saved controllers run in series (each for its own
-    task's motion_seconds) from the first one's start state."""
+def stage_end(paths) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Final (q, qd, contact anchors) of saved controllers run in series
+    (each for its own task's motion_seconds) from the first one's start
+    state: the whole physical state a composite would carry on."""
     from gpmotion.compose import composite
     try:
         comp = composite.from_controllers(paths)
@@ -166,4 +175,4 @@ def stage_end(paths) -> tuple[np.ndarray, np.ndarray]:
     traj, _ = composite.run(comp)
     if traj.diverged[0]:
         raise ValueError(f"after: the earlier stages {paths} diverge")
-    return traj.q[0, -1].copy(), traj.qd[0, -1].copy()
+    return traj.q[0, -1].copy(), traj.qd[0, -1].copy(), traj.contact_end[0].copy()

@@ -403,3 +403,28 @@ def test_bob_walk_v2_charges_the_waddle_v1_did_not_see():
     assert np.degrees(m2["facing"][0]) > 15
     extra = 1.0 * m2["facing"] + (10.0 - 2.0) * m2["fall"]          # v2's added charges
     assert c2[0] == pytest.approx(c1[0] + extra[0], rel=1e-9)
+
+
+def test_a_stage_run_alone_is_the_composite_phase_exactly(tmp_path):
+    """``after=`` hands on the whole physical state a composite carries (q,
+    q̇ and the contacts' friction anchors): a turn run alone from the walk's
+    end follows the composite's turn phase exactly.  (With q and q̇ alone the
+    two parted from the first frame, 3e-4 rad after 20 ms.)"""
+    from gpmotion.compose import composite
+    from gpmotion.controller_file import save_controller
+    paths = []
+    for name, seed in (("rex_walk", 2), ("rex_turn", 3)):
+        task = gpmotion.get_task(name, seconds=0.6, hold=0.2)
+        fam = make_family("bsr-time", task, segments="variable", t_per=0.5)
+        paths.append(tmp_path / f"{name}.json")
+        save_controller(paths[-1], task, fam.random(np.random.default_rng(seed)), family=fam)
+    traj, bounds = composite.run(composite.from_controllers(paths))
+    k = int(bounds[0, 1])
+    from gpmotion.replay import load_controller, replay_genome
+    _, fam, act, genome, rec = load_controller(paths[1])
+    turn = gpmotion.get_task("rex_turn", seconds=0.6, hold=0.2, after=str(paths[0]))
+    assert turn.initial_contact() is not None and np.any(turn.initial_contact() != 0)
+    alone, *_ = replay_genome(turn, make_family("bsr-time", turn, **fam.options), act, genome)
+    n = traj.q.shape[1] - k
+    assert n > 20
+    assert np.array_equal(alone.q[0, :n], traj.q[0, k:])
