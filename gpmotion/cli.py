@@ -68,7 +68,8 @@ def _add_run_args(p):
                    help="run the task on a figure variant, a TOML file or a registered figure "
                         "(it must have the joints, sites, contacts and senses the task uses)")
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
-                   help="task parameter (gpmotion show TASK); VALUE may be a comma list to run a series")
+                   help="task parameter (gpmotion show TASK); a number's VALUE may be a comma list to "
+                        "run a series (a text parameter such as after= takes the list as its value)")
     p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
     p.add_argument("--force", action="store_true", help="move an existing run directory aside")
     p.add_argument("--resume", action="store_true", help="continue an existing run directory")
@@ -298,6 +299,16 @@ def cmd_show(args):
     print(describe_task(args.task))
 
 
+def _text_param(task: str, key: str) -> bool:
+    """A parameter whose default is text (``after``: a comma-separated list of
+    files) takes a comma list as its one value, never as a series."""
+    from .task import task_class
+    try:
+        return isinstance(task_class(task).params.get(key), str)
+    except ValueError:                 # an unknown task: reported where the run is built
+        return False
+
+
 def _run_configs(args):
     from .cli_options import collect
     from .families import family_class, family_names
@@ -308,7 +319,7 @@ def _run_configs(args):
         raise ValueError(unknown("controller", args.controller, family_names()))
     params = _params(args.param)
     plugins = _activate_plugins(args)     # before the options: --primitives may name a plugin's
-    series = {k: v.split(",") for k, v in params.items() if "," in v}
+    series = {k: v.split(",") for k, v in params.items() if "," in v and not _text_param(args.task, k)}
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
     validate_number("--seeds", args.seeds, lo=1, hi=10_000, integer=True)

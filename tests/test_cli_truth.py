@@ -273,3 +273,14 @@ def test_family_options_from_a_file_are_validated():
             make_family("bsr-time", task, bsr_dt=bad)
     make_family("gp", task, erc_range=[-2.0, 2.0])
     make_family("bsr-time", task, bsr_dt=0.05)
+
+
+def test_a_text_parameter_takes_a_comma_list_as_one_value_a_number_runs_a_series():
+    """``--param after=walk.json,turn.json`` (the README's walk → turn → walk)
+    is one run from both files' end; ``--param distance=0.3,0.5`` a series."""
+    args = parser().parse_args(["run", "rex_walk", "--controller", "bsr-time",
+                                "--param", "after=walk.json,turn.json"])
+    (cfg, _), = list(_run_configs(args))
+    assert cfg.params["after"] == "walk.json,turn.json"
+    args = parser().parse_args(["run", "lamp_hop", "--param", "distance=0.3,0.5"])
+    assert [cfg.params["distance"] for cfg, _ in _run_configs(args)] == ["0.3", "0.5"]   # parsed later
