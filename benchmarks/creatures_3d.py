@@ -110,7 +110,7 @@ def sequence(a) -> int:
     comp = composite.from_controllers([paths[n] for n, _, _ in stages], names=[n for n, _, _ in stages])
     traj, bounds = composite.run(comp)
     from gpmotion.tasks._creature3d import creature_measures
-    from gpmotion.tasks.rex_walk import FEET
+    from gpmotion.tasks.rex_walk import RexTask
     parts = []
     for k, (name, _, _) in enumerate(stages):
         lo, hi = int(bounds[0, k]), int(bounds[0, k + 1])
@@ -119,7 +119,9 @@ def sequence(a) -> int:
         sl = slice(lo, hi + 1)
         piece = replace(piece, q=piece.q[:, sl], qd=piece.qd[:, sl], com=piece.com[:, sl],
                         contact_force=piece.contact_force[:, sl], times=piece.times[sl])
-        parts.append(creature_measures(piece, FEET))
+        # "never fallen" by Rex's own test (trunk 30°, com 75 %), as each stage's search judged it
+        parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
+                                       min_height=RexTask.min_height))
     done = (parts[0]["distance"][0] >= 1.0 and parts[1]["turn"][0] >= np.radians(45)
             and parts[2]["distance"][0] >= 1.0 and not any(p["fall"][0] > 0 for p in parts))
     report["composite"] = {"walk_m": float(parts[0]["distance"][0]),

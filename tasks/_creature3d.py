@@ -9,7 +9,7 @@ each task weights them):
 * ``sideways``      |com displacement across it| at the end (m)
 * ``fall``          fraction of the episode spent fallen (gpmotion.bsr.secondary3d)
 * ``rotation``      |net rotation about the vertical| (rad)
-* ``facing``        mean |heading − start heading| over the episode (rad)
+* ``facing``        mean |heading − start heading| over the motion (rad)
 * ``feet_forward``  mean forward displacement of the feet (m)
 * ``turn``          |change of heading| (rad)
 * ``steps``         forward steps before the first fall (bipeds)
@@ -146,7 +146,7 @@ class CreatureTask(Task):
     def measure(self, traj):
         frames = None
         if self.params.get("hold"):
-            frames = int(round(float(self.params["seconds"]) / (self.dt * self.record_every))) + 1
+            frames = int(round(self.motion_seconds / (self.dt * self.record_every))) + 1
         return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups,
                                  self.max_tilt, self.min_height, frames)
 
