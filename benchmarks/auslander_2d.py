@@ -20,6 +20,7 @@ smaller budget finished, and names the budgets it counted.
 
 Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-sense      Star-Man, sense-based, R = 10, unguided   [shuffle, Figs. 9-10]
+  star-sense-contact  Star-Man, sense-based, R = 10, + contact_distance  [shuffle, Fig. 9]
   star-time       Star-Man, time-based, unguided
   star-contact    + contact_distance                        [shuffle]
   star-rotations  + rotations                               [cartwheel]
@@ -52,6 +53,11 @@ ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = {
     "star-sense": ("starman_travel", "bsr-sense", {}, {"rules": 10}, ("shuffle", "periodic shuffle"),
                    "Star-Man sense-based R=10, unguided"),
+    # the paper's Fig. 9 shuffle is a sense-based controller (R = 10); Table 3's
+    # "a positive weight only to contact_distance guarantees a shuffling gait"
+    "star-sense-contact": ("starman_travel", "bsr-sense", {"w_contact_distance": 2.0}, {"rules": 10},
+                           ("shuffle", "periodic shuffle"),
+                           "Star-Man sense-based R=10 + contact_distance (w 2)"),
     "star-time": ("starman_travel", "bsr-time", {}, {}, (), "Star-Man time-based, unguided"),
     "star-contact": ("starman_travel", "bsr-time", {"w_contact_distance": 2.0}, {},
                      ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 2)"),

@@ -242,3 +242,25 @@ def test_robust_cli_options_and_their_errors(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("gpmotion: error:"), err
     assert not (tmp_path / "x").exists()
+
+
+def test_a_robust_serial_run_judges_mutants_and_parents_on_the_same_starts(tmp_path):
+    """The checkpoint's working scores are each controller's cost from the
+    last round's starts, so the next mutants are compared on equal terms
+    (before: a parent kept the cost of whatever starts it was first scored on)."""
+    import json as _json
+    from gpmotion.inprocess import InProcessEvaluator
+    from gpmotion.run import build, run
+    cfg = _robust_cfg(search={"n_working": 4, "n_generations": 4})
+    run(cfg, tmp_path / "r", quiet=True, artifacts=False)
+    task, fam, search, _ = build(_robust_cfg(search={"n_working": 4, "n_generations": 4}))
+    state = _json.loads((tmp_path / "r" / "checkpoint.json").read_text())["search"]
+    assert state["config"]["fresh_scores"] is True
+    search.load_state_dict(state)
+    ev = InProcessEvaluator(task, fam, actuation=fam.default_actuation,
+                            robust={**cfg.robust, "seed": cfg.seed})
+    last = search.generation - 1
+    again = ev.evaluate(search.working, search.progress_of(last), generation=last).costs
+    np.testing.assert_array_equal(again, search.scores)
+    rows = (tmp_path / "r" / "log.csv").read_text().splitlines()[1:]
+    assert [r.split(",")[0] for r in rows] == ["0", "1", "1", "2", "2", "3", "3", "4"]   # re-scores repeat g

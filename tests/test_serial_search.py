@@ -218,3 +218,62 @@ def test_resume_across_a_rescore_is_exact(stop_between_ask_and_tell):
     run_phased(resumed)
     assert resumed.history == full.history
     assert resumed.best_genome.to_dict() == full.best_genome.to_dict()
+
+
+# -- noisy costs (robust starts redrawn every round) ------------------------------
+
+def noisy_cost(g, generation):
+    """toy_cost plus a per-round luck term that a controller gets from its starts:
+    round g's starts make everyone's cost differ by the same-seeded draw."""
+    luck = np.random.default_rng([7, int(generation)]).normal(0.0, 2.0)
+    return toy_cost(g) + luck
+
+
+def run_noisy(search, until=None, log=None):
+    while not search.done and (until is None or search.generation < until):
+        gen, rescoring = search.generation, search.working is not None and search._stale()
+        cands = search.ask()
+        costs = [noisy_cost(g, gen) for g in cands]      # the evaluator's (seed, round) starts
+        if log is not None:
+            log.append((gen, rescoring, len(cands)))
+        search.tell(costs)
+    return search
+
+
+def test_fresh_scores_judge_a_mutant_and_its_parent_on_the_same_starts():
+    s = make(2, fresh_scores=True, n_generations=40)
+    log = []
+    run_noisy(s, log=log)
+    # round 0's mutants meet the initial scores (round 0's starts); each later round:
+    # a re-score of C + 1 at round g, then C mutants at round g
+    assert log[:2] == [(0, False, 6), (0, False, 6)]
+    rounds = log[2:]
+    assert [(r[1], r[2]) for r in rounds] == [(True, 7), (False, 6)] * 39
+    assert all(a[0] == b[0] for a, b in zip(rounds[::2], rounds[1::2]))
+    assert s.evaluations == 6 + 6 + 39 * (7 + 6)
+    # every stored score is that controller's cost on the last round's starts
+    last = s.generation - 1
+    assert list(s.scores) == [noisy_cost(g, last) for g in s.working]
+
+
+def test_stale_scores_let_lucky_parents_block_better_mutants():
+    """Without fresh scores a parent keeps the cost of its luckiest round, so
+    mutants drawn under worse luck are refused even when they are better."""
+    stale, fresh = make(4, n_generations=60), make(4, fresh_scores=True, n_generations=60)
+    run_noisy(stale), run_noisy(fresh)
+    truth = lambda s: min(toy_cost(g) for g in s.working)   # noqa: E731
+    # the stale search's stored scores are far below what its controllers cost on average
+    gap = np.mean([sc - toy_cost(g) for g, sc in zip(stale.working, stale.scores)])
+    assert gap < -1.0
+    assert truth(fresh) < truth(stale)
+
+
+def test_fresh_scores_resume_exactly_and_are_in_the_checkpoint():
+    full = run_noisy(make(5, fresh_scores=True, n_generations=30))
+    part = run_noisy(make(5, fresh_scores=True, n_generations=30), until=12)
+    assert part.config()["fresh_scores"] is True and "fresh_scores" not in make(5).config()
+    resumed = restored(part, make(6, fresh_scores=True, n_generations=30), False)
+    run_noisy(resumed)
+    assert resumed.history == full.history
+    with pytest.raises(ValueError, match="fresh_scores"):
+        make(0, fresh_scores="yes")

@@ -75,6 +75,9 @@ class BSRFamily(Family):
     def search_defaults(cls, task) -> dict:
         return dict(SERIAL_DEFAULTS)
 
+    def noisy_settings(self) -> dict:
+        return {"fresh_scores": True}          # parents re-scored on each round's starts
+
     def budget_settings(self, budget: int, population: int | None = None) -> dict:
         return {"n_working": BUDGET_WORKING,
                 "n_generations": serial_generations(self.task, budget, BUDGET_WORKING)}

@@ -35,6 +35,13 @@ Decisions, all stated once here:
   end ``best_genome`` is the best under the last phase's scoring.  A
   re-score draws no random numbers.  (A re-score is its own row of the log:
   a generation number repeated, C + 1 evaluations.)
+* noisy costs: with ``fresh_scores=True`` every round is a phase of its own,
+  so the working set and the incumbent are re-scored before each round's
+  mutants.  Robust runs set it (``Family.noisy_settings``): their starts are
+  drawn anew each round from (seed, round), and the re-score asks at the
+  same round as the mutants that follow, so a mutant and its parent are
+  judged from the same starts — not a mutant's fresh starts against its
+  parent's luckiest earlier ones.  A round then costs 2C + 1 evaluations.
 ``state_dict()`` is JSON-safe (rng state from ``rng.bit_generator.state``),
 so a run resumes bit-for-bit from a checkpoint taken between any two calls.
 """
@@ -105,7 +112,8 @@ class SerialSearch(Search):
 
     def __init__(self, family, seed: int | None = None, n_working: int = 10,
                  n_generations: int = 4000, reseed_every: int = 200,
-                 accept_ties: bool = False, phase_steps: int = PHASE_STEPS, task=None, rng=None):
+                 accept_ties: bool = False, phase_steps: int = PHASE_STEPS,
+                 fresh_scores: bool = False, task=None, rng=None):
         super().__init__(family, task)
         if rng is None and seed is None:
             raise ValueError("SerialSearch needs a seed (randomness is explicit)")
@@ -120,6 +128,9 @@ class SerialSearch(Search):
         self.reseed_every = int(reseed_every)
         self.accept_ties = bool(accept_ties)
         self.phase_steps = int(phase_steps)
+        if not isinstance(fresh_scores, (bool, np.bool_)):
+            raise ValueError(f"fresh_scores must be true or false, got {fresh_scores!r}")
+        self.fresh_scores = bool(fresh_scores)
         self.phase = None              # phase the working scores and best_score are of
         self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
@@ -179,8 +190,9 @@ class SerialSearch(Search):
         return list(self.pending)
 
     def current_phase(self) -> tuple:
-        """Phase of the round ``ask`` hands out next."""
-        return self.phase_of(self.generation)
+        """Phase of the round ``ask`` hands out next (with fresh scores, the round too)."""
+        own = (float(self.generation),) if self.fresh_scores else ()
+        return self.phase_of(self.generation) + own
 
     def _stale(self) -> bool:
         return self.current_phase() != self.phase
@@ -269,7 +281,8 @@ class SerialSearch(Search):
         ``maximize`` is always false: kept for the checkpoint format)."""
         return {"n_working": self.n_working, "n_generations": self.n_generations,
                 "reseed_every": self.reseed_every, "maximize": False,
-                "accept_ties": self.accept_ties}
+                "accept_ties": self.accept_ties,
+                **({"fresh_scores": True} if self.fresh_scores else {})}   # absent: as before
 
     # -- checkpoints ---------------------------------------------------------
     def _state(self) -> dict:
@@ -307,6 +320,7 @@ class SerialSearch(Search):
         self.n_working, self.n_generations = int(cfg["n_working"]), int(cfg["n_generations"])
         self.reseed_every = int(cfg["reseed_every"])
         self.accept_ties = bool(cfg["accept_ties"])
+        self.fresh_scores = bool(cfg.get("fresh_scores", False))   # absent before robust re-scores
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.rng.bit_generator.state = state["rng"]
         opt = lambda xs, f: None if xs is None else [f(x) for x in xs]  # noqa: E731
