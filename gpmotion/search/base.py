@@ -47,12 +47,17 @@ class FinalBest:
     scene are not final: such evaluations are skipped, and the value is
     unknown (None) until the curriculum is done.  Bare costs (no measures,
     a toy objective) are final costs when there is no task, else skipped.
+
+    ``per_round``: costs of different rounds are not comparable (robust
+    starts redrawn each round), so the best is the best of the latest round
+    told (every batch told at that round), not the luckiest of the run.
     """
 
-    def __init__(self, family, task=None):
-        self.family, self.task = family, task
+    def __init__(self, family, task=None, per_round: bool = False):
+        self.family, self.task, self.per_round = family, task, per_round
         self._final_scene = None if task is None else task.staged(1.0)
         self.genome, self.cost = None, math.inf
+        self.round = None                 # the round the best is of (per_round)
 
     def known_at(self, progress: float) -> bool:
         return self.task is None or self.task.staged(progress) == self._final_scene
@@ -64,9 +69,11 @@ class FinalBest:
             return None
         return self.task.cost(ev.measures, ev.failed, 1.0)
 
-    def update(self, genomes, ev: Evaluation, progress: float) -> None:
+    def update(self, genomes, ev: Evaluation, progress: float, round_: int | None = None) -> None:
         if not len(genomes) or not self.known_at(progress):
             return
+        if self.per_round and round_ != self.round:
+            self.genome, self.cost, self.round = None, math.inf, round_
         c = self._final_costs(ev)
         if c is None:
             return
@@ -80,16 +87,19 @@ class FinalBest:
         return None if self.genome is None else self.cost
 
     def state_dict(self):
-        return None if self.genome is None else {"genome": self.family.to_json(self.genome),
-                                                 "cost": self.cost}
+        if self.genome is None:
+            return None
+        own = {"round": self.round} if self.per_round else {}
+        return {"genome": self.family.to_json(self.genome), "cost": self.cost, **own}
 
     def load_state_dict(self, d) -> None:
         if d is None:
-            self.genome, self.cost = None, math.inf
+            self.genome, self.cost, self.round = None, math.inf, None
             return
         if not isinstance(d, dict):
             raise ValueError(f"checkpoint {FINAL_KEY} must be an object or null")
         self.genome, self.cost = self.family.from_json(d["genome"]), float(d["cost"])
+        self.round = d.get("round")
 
 
 class Search:
@@ -122,10 +132,10 @@ class Search:
         ev = evaluation if isinstance(evaluation, Evaluation) else Evaluation.of_costs(evaluation)
         if len(ev.costs) != len(self._asked):
             raise ValueError(f"tell: expected {len(self._asked)} costs, got {len(ev.costs)}")
-        self.told_progress = self.progress
+        self.told_progress, round_ = self.progress, self.generation
         asked, self._asked = self._asked, None
         self._tell(ev)
-        self.final.update(asked, ev, self.told_progress)
+        self.final.update(asked, ev, self.told_progress, round_)
         self._row = self._make_row(ev)
 
     @property

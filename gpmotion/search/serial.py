@@ -41,7 +41,9 @@ Decisions, all stated once here:
   drawn anew each round from (seed, round), and the re-score asks at the
   same round as the mutants that follow, so a mutant and its parent are
   judged from the same starts — not a mutant's fresh starts against its
-  parent's luckiest earlier ones.  A round then costs 2C + 1 evaluations.
+  parent's luckiest earlier ones.  A round then costs 2C + 1 evaluations,
+  and the best under the final weights is the latest round's best (the
+  incumbent re-scored, or a controller that beat it on the same starts).
 ``state_dict()`` is JSON-safe (rng state from ``rng.bit_generator.state``),
 so a run resumes bit-for-bit from a checkpoint taken between any two calls.
 """
@@ -131,6 +133,7 @@ class SerialSearch(Search):
         if not isinstance(fresh_scores, (bool, np.bool_)):
             raise ValueError(f"fresh_scores must be true or false, got {fresh_scores!r}")
         self.fresh_scores = bool(fresh_scores)
+        self.final.per_round = self.fresh_scores     # no best picked by the luck of its starts
         self.phase = None              # phase the working scores and best_score are of
         self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
@@ -321,6 +324,7 @@ class SerialSearch(Search):
         self.reseed_every = int(cfg["reseed_every"])
         self.accept_ties = bool(cfg["accept_ties"])
         self.fresh_scores = bool(cfg.get("fresh_scores", False))   # absent before robust re-scores
+        self.final.per_round = self.fresh_scores
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.rng.bit_generator.state = state["rng"]
         opt = lambda xs, f: None if xs is None else [f(x) for x in xs]  # noqa: E731
