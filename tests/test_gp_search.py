@@ -293,3 +293,35 @@ def test_one_island_is_the_plain_search(family):
     a = run(make(family, seed=3), family)
     b = run(make(family, seed=3, islands=1, migrants=0), family)
     assert a.population == b.population and a.best == b.best
+
+
+# ------------------------------------------------- noisy costs (robust starts)
+
+def run_noisy(search, family):
+    """Toy costs plus the luck of each generation's starts: easy on even
+    generations, hard on odd ones (the same for every individual)."""
+    lowest = []
+    while not search.done:
+        luck = -1.0 if search.generation % 2 == 0 else 1.0
+        costs = [c + luck for c in toy_costs(family, search.ask())]
+        lowest.append(min(costs))
+        search.tell(costs)
+    return lowest
+
+
+def test_fresh_scores_keep_the_last_generations_best_not_the_luckiest(family):
+    kw = dict(generations=10, population=20, reuse_costs=False, seed=3)    # the last (9) is hard
+    stale, fresh = make(family, **kw), make(family, fresh_scores=True, **kw)
+    lowest = run_noisy(stale, family)
+    assert run_noisy(fresh, family) == lowest                  # the same search, only the best differs
+    last = fresh.generation_best[-1]
+    assert fresh.best_cost == last["cost"] == lowest[-1] and fresh.best == last["genome"]
+    assert last["cost"] > min(lowest) + 1.0
+    assert stale.best_cost == min(lowest)                     # without: the luckiest cost of the run
+    assert fresh.config()["fresh_scores"] is True and "fresh_scores" not in stale.config()
+    state = json.loads(json.dumps(fresh.state_dict(), allow_nan=False))
+    again = make(family, seed=0)
+    again.load_state_dict(state)
+    assert again.fresh_scores and again.final.per_round and again.best_cost == fresh.best_cost
+    with pytest.raises(ValueError, match="reuse_costs"):
+        make(family, fresh_scores=True)

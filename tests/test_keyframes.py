@@ -107,3 +107,28 @@ def test_same_result_on_a_pool_and_on_dask(tmp_path, backend):
     assert main([*RUN, "--out", str(tmp_path / "here")]) == 0
     assert main([*RUN, "--out", str(tmp_path / "there"), *backend]) == 0
     assert record(tmp_path / "there") == record(tmp_path / "here")
+
+
+def test_fresh_scores_keep_the_last_generations_best_not_the_luckiest():
+    """Robust starts (noisy costs): the best is the last generation's, and the
+    search itself (its samples) is unchanged."""
+    fam = make_family("keyframes", get_task("lamp_hop", seconds=0.3))
+
+    def run_noisy(s):
+        lowest, asked = [], []
+        while not s.done:
+            luck = -1.0 if s.generation % 2 == 0 else 1.0     # easy, hard, easy, ... starts
+            g = s.ask()
+            asked.append([fam.to_json(x) for x in g])
+            costs = [float(np.sum(np.square(x))) * 1e-3 + luck for x in g]
+            lowest.append(min(costs))
+            s.tell(costs)
+        return lowest, asked
+    # lamp_hop's style terms are at full weight from generation 8 of 0..9: 8 (easy) and 9 share a phase
+    stale, fresh = fam.make_search(7, population=6, generations=10), \
+        fam.make_search(7, population=6, generations=10, fresh_scores=True)
+    (lo_s, a_s), (lo_f, a_f) = run_noisy(stale), run_noisy(fresh)
+    assert a_s == a_f and lo_s == lo_f
+    assert stale.best_cost == lo_s[8] < lo_f[9] - 1.0 and fresh.best_cost == lo_f[9]
+    assert fam.noisy_settings() == {"fresh_scores": True}
+    assert fresh.config()["fresh_scores"] is True and "fresh_scores" not in stale.config()

@@ -255,7 +255,8 @@ class GPFamily(Family):
         return super().make_search(seed, **opts)
 
     def noisy_settings(self) -> dict:
-        return {"reuse_costs": False}          # copies are re-evaluated on the new starts
+        # copies are re-evaluated on the new starts; the best is the latest generation's
+        return {"reuse_costs": False, "fresh_scores": True}
 
     def budget_settings(self, budget: int, population: int | None = None) -> dict:
         pop = min(population or BUDGET_POPULATION, budget)

@@ -67,8 +67,13 @@ class CMAESSearch(GenerationalSearch):
     total_key = "generations"
 
     def __init__(self, family, seed: int | None = None, population: int | None = None,
-                 generations: int = 100, sigma0: float = 0.25, task=None):
+                 generations: int = 100, sigma0: float = 0.25, fresh_scores: bool = False,
+                 task=None):
         super().__init__(family, task)
+        if not isinstance(fresh_scores, bool):
+            raise ValueError(f"CMAESSearch: fresh_scores must be true or false, got {fresh_scores!r}")
+        # robust starts: costs of two generations are not comparable, the best is the latest's
+        self.fresh_scores = self.final.per_round = fresh_scores
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise ValueError(f"CMAESSearch: seed must be an integer, got {seed!r}")
         if population is not None and (isinstance(population, bool)
@@ -119,7 +124,7 @@ class CMAESSearch(GenerationalSearch):
         self.told.append(c.tolist())
         self._told_costs = c
         i = int(np.argmin(c))                    # first of equal minima
-        phase = self.phase_of(self.generation)
+        phase = self.phase_of(self.generation) + ((float(self.generation),) if self.fresh_scores else ())
         if self._best is None or phase != self._best_phase or c[i] < self._best_cost:
             self._best = self.family.denormalize(x[i])
             self._best_cost, self._best_phase = float(c[i]), phase
@@ -141,7 +146,8 @@ class CMAESSearch(GenerationalSearch):
 
     def config(self) -> dict:
         return {"population": self.population, "generations": self.generations,
-                "sigma0": self.sigma0, "seed": self.seed}
+                "sigma0": self.sigma0, "seed": self.seed,
+                **({"fresh_scores": True} if self.fresh_scores else {})}    # absent: as before
 
     def check_restored(self) -> None:
         if len(self.told) != self.generation or any(len(c) != self.population for c in self.told):
@@ -165,6 +171,7 @@ class CMAESSearch(GenerationalSearch):
         cfg = state["config"]
         self.seed, self.sigma0 = int(cfg["seed"]), float(cfg["sigma0"])
         self.generations = int(cfg["generations"])
+        self.fresh_scores = self.final.per_round = bool(cfg.get("fresh_scores", False))
         self._start(int(cfg["population"]))
         told = state["told"]
         if not isinstance(told, list) or len(told) > 10**7:
@@ -265,6 +272,9 @@ class KeyframesFamily(Family):
         return g
 
     # -- search --------------------------------------------------------------------
+    def noisy_settings(self) -> dict:
+        return {"fresh_scores": True}          # robust starts: the best is the latest generation's
+
     def budget_settings(self, budget: int, population: int | None = None) -> dict:
         lam = population or 4 + int(3 * math.log(self.shape[0] * self.shape[1]))
         lam = max(2, min(lam, budget))

@@ -36,6 +36,10 @@ Decisions, stated once here:
   (progress past every term's ramp, and always in the last generation,
   progress 1), ``hall_of_fame`` is the best ever under the full score.
   ``generation_best`` keeps each generation's best with the cost it had then.
+  With ``fresh_scores`` (robust runs: starts redrawn each generation, so
+  costs of two generations are not comparable either) every generation is a
+  phase of its own: ``hall_of_fame`` and the final-weights best are the last
+  generation's best, not the luckiest cost of the run.
 * **Randomness.**  DEAP's operators (and the primitive set's ERC) draw from
   the module-level :mod:`random`.  The search keeps its own state, seeded
   from ``seed``: around each variation step it saves the caller's global
@@ -91,7 +95,7 @@ class GPSearch(GenerationalSearch):
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True,
-                 stop_on_success: bool = False, task=None):
+                 stop_on_success: bool = False, fresh_scores: bool = False, task=None):
         super().__init__(family, task if task is not None else getattr(family, "task", None))
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
@@ -100,7 +104,7 @@ class GPSearch(GenerationalSearch):
                              selection=selection, tournament_size=tournament_size,
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
                              max_size=max_size, seed=seed, reuse_costs=reuse_costs,
-                             stop_on_success=stop_on_success))
+                             stop_on_success=stop_on_success, fresh_scores=fresh_scores))
         self.stopped = False                      # stop_on_success fired
         self._rstate = random.Random(self.seed).getstate()
         self.generation = 0
@@ -127,6 +131,7 @@ class GPSearch(GenerationalSearch):
             bad("generations must be an integer >= 1", c["generations"])
         c.setdefault("p_creep", 0.0)            # checkpoints written before creep existed
         c.setdefault("stop_on_success", False)
+        c.setdefault("fresh_scores", False)     # absent before robust runs kept a per-round best
         c.setdefault("creep_sigma", 0.1)
         for k, v in (("islands", 1), ("migrate_every", 5), ("migrants", 2)):
             c.setdefault(k, v)
@@ -160,6 +165,11 @@ class GPSearch(GenerationalSearch):
         if (not isinstance(d, (tuple, list)) or len(d) != 2 or not all(map(_is_int, d))
                 or not 0 <= d[0] <= d[1] <= c["max_depth"]):
             bad("init_depth must be (min, max) integers with 0 <= min <= max <= max_depth", d)
+        if not isinstance(c["fresh_scores"], bool):
+            bad("fresh_scores must be true or false", c["fresh_scores"])
+        if c["fresh_scores"] and c["reuse_costs"]:
+            bad("fresh_scores (costs comparable within a generation only) needs reuse_costs "
+                "false", c["fresh_scores"])
         if not _is_int(c["seed"]):
             bad("seed must be an integer (randomness is explicit)", c["seed"])
         self.population_size, self.generations = int(c["population"]), int(c["generations"])
@@ -172,6 +182,7 @@ class GPSearch(GenerationalSearch):
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
         self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
         self.stop_on_success = bool(c["stop_on_success"])
+        self.fresh_scores = self.final.per_round = bool(c["fresh_scores"])
         self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
 
     def config(self) -> dict:
@@ -183,7 +194,8 @@ class GPSearch(GenerationalSearch):
                 "selection": self.selection, "tournament_size": self.tournament_size,
                 "elitism": self.elitism, "init_depth": list(self.init_depth),
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
-                "reuse_costs": self.reuse_costs, "stop_on_success": self.stop_on_success}
+                "reuse_costs": self.reuse_costs, "stop_on_success": self.stop_on_success,
+                **({"fresh_scores": True} if self.fresh_scores else {})}    # absent: as before
 
     # -- randomness ----------------------------------------------------------
     @contextlib.contextmanager
@@ -210,6 +222,11 @@ class GPSearch(GenerationalSearch):
                 self._set_population(self._breed())
             self.generation += 1
         self.generations = max(self.generations, total)
+
+    def _best_phase_of(self, generation: int) -> tuple:
+        """What the hall of fame's cost depends on: the phase, and with fresh scores
+        (robust starts) the generation too, so the best is this generation's."""
+        return self.phase_of(generation) + ((float(generation),) if self.fresh_scores else ())
 
     def _cache_phase(self, generation: int) -> tuple:
         return self.phase_of(generation) if self.reuse_costs else (float(generation),)
@@ -286,7 +303,7 @@ class GPSearch(GenerationalSearch):
     def _record(self, n_evaluated: int, evaluation) -> None:
         c = self._told_costs = self.costs           # the population's costs (breeding resets them)
         i = int(np.argmin(c))                    # first of equal minima
-        phase = self.phase_of(self.generation)
+        phase = self._best_phase_of(self.generation)
         cost = float(c[i])
         self.generation_best.append({"generation": self.generation, "progress": self.progress,
                                      "cost": cost, "genome": [list(t) for t in self._keys[i]]})
@@ -330,7 +347,7 @@ class GPSearch(GenerationalSearch):
         if ok.size:
             i = int(ok[np.argmin(costs[ok])])
             self._best_key, self.hof_cost = self._pending[i], float(costs[i])
-            self.best_generation, self._best_phase = self.generation, self.phase_of(self.generation)
+            self.best_generation, self._best_phase = self.generation, self._best_phase_of(self.generation)
             self.stopped = True
 
     def _island_bounds(self) -> list[tuple[int, int]]:
