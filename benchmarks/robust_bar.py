@@ -53,6 +53,13 @@ def stopped(out: Path) -> bool:
     return bool(json.loads((out / "checkpoint.json").read_text())["search"].get("stopped", False))
 
 
+def searched(out: Path) -> dict:
+    """The finished search's rounds (GP generations, serial rounds: re-scores are not
+    rounds) and evaluations (controllers scored, re-scores included)."""
+    st = json.loads((out / "checkpoint.json").read_text())["search"]
+    return {"generation": int(st["generation"]), "evaluations": int(st["evaluations"])}
+
+
 def extend(out: Path, n: int) -> float:
     """Add n generations to a finished run that did not stop on success (once); seconds spent."""
     cfg = json.loads((out / "config.json").read_text())
@@ -106,7 +113,9 @@ def main(argv=None):
             if kind == "robust":
                 row["robust_wall_s"] += round(extend(out, a.extend), 1)
                 row["robust_stopped"] = stopped(out)
-                row["robust_generations"] = len((out / "log.csv").read_text().splitlines()) - 1
+                row["robust_generations"] = searched(out)["generation"]
+            row[f"{kind}_evaluations"] = searched(out)["evaluations"]
+            row[f"{kind}_episodes"] = row[f"{kind}_evaluations"] * (a.starts if kind == "robust" else 1)
             row[kind] = judge(out, a.trials)
         rows.append(row)
         print(json.dumps(row), file=sys.stderr, flush=True)
@@ -116,13 +125,16 @@ def main(argv=None):
     print(f"{a.task} ({a.controller}), K = {a.starts} starts ({a.aggregate}), confirm {a.confirm}, "
           f"require {a.require} vs nominal; "
           f"success from {a.trials} perturbed starts (trial 0 nominal)")
-    print("| seed | evolved nominally: success | nominal start | evolved robust: success | nominal start "
-          "| robust run: generations, stopped on a confirmed solver |")
-    print("|---|---|---|---|---|---|")
+    print("| seed | evolved nominally: success | nominal start | episodes | evolved robust: success "
+          "| nominal start | episodes (K × evaluations) | robust run: generations, stopped on a "
+          "confirmed solver |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         n, b = r["nominal"], r["robust"]
         print(f"| {r['seed']} | {100 * n['success_rate']:.0f} % | {'ok' if n['nominal_success'] else 'fails'} "
+              f"| {r['nominal_episodes']:,} "
               f"| {100 * b['success_rate']:.0f} % | {'ok' if b['nominal_success'] else 'fails'} "
+              f"| {r['robust_episodes']:,} "
               f"| {r['robust_generations']}, {'yes' if r['robust_stopped'] else 'no'} |")
     for kind in ("nominal", "robust"):
         s = sorted(r[kind]["success_rate"] for r in rows)
