@@ -24,6 +24,12 @@ from pathlib import Path
 from gpmotion.compose.robust import robustness
 from gpmotion.replay import load_controller
 from gpmotion.run import RunConfig, run
+from gpmotion.task import task_id
+
+
+def _fail(msg: str) -> None:
+    print(f"robust_bar: {msg}", file=sys.stderr)
+    sys.exit(2)
 
 
 def _pairs(items, what):
@@ -31,13 +37,29 @@ def _pairs(items, what):
     for it in items or []:
         k, eq, v = it.partition("=")
         if not eq:
-            sys.exit(f"{what} expects KEY=VALUE, got {it!r}")
+            _fail(f"{what} expects KEY=VALUE, got {it!r}")
         out[k] = json.loads(v) if v in ("true", "false") or v.lstrip("-").replace(".", "", 1).isdigit() else v
     return out
 
 
+def recorded_as_asked(cfg: RunConfig, out: Path) -> None:
+    """Refuse to reuse a run folder recorded with other settings (never mix runs)."""
+    doc = json.loads((out / "config.json").read_text())["run"]
+    want = cfg.to_json()
+    diff = [k for k in ("family", "seed", "params", "search") if doc.get(k) != want.get(k)]
+    if task_id(doc.get("task", ""), recorded=True) != task_id(cfg.task):
+        diff.insert(0, "task")
+    got_r, want_r = doc.get("robust") or {}, cfg.robust or {}
+    diff += [f"robust {k}" for k in ("starts", "aggregate", "confirm", "require")
+             if got_r.get(k) != want_r.get(k)]
+    if diff:
+        _fail(f"{out} was run with other settings ({', '.join(diff)}); use another --out")
+
+
 def one_run(cfg: RunConfig, out: Path) -> float:
     """Run (or finish) one run; seconds spent now (0 when it was done already)."""
+    if (out / "config.json").exists():
+        recorded_as_asked(cfg, out)
     if (out / "best.json").exists():
         return 0.0
     t0 = time.perf_counter()
@@ -97,7 +119,8 @@ def main(argv=None):
     a = ap.parse_args(argv)
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
     base = Path(a.out) / f"{a.task}-{a.controller}"
-    tag = "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require)) if v not in (0, 1.0))
+    tag = f"-k{a.starts}" + "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require))
+                                     if v not in (0, 1.0))
     tag += "" if a.aggregate == "mean" else f"-{a.aggregate}"
     rows = []
     for seed in range(a.first_seed, a.first_seed + a.seeds):
