@@ -114,10 +114,15 @@ def main(argv=None):
     ap.add_argument("--trials", type=int, default=100)
     ap.add_argument("--param", action="append", metavar="KEY=VALUE", help="task parameter")
     ap.add_argument("--search", action="append", metavar="KEY=VALUE", help="search setting (both runs)")
+    ap.add_argument("--nominal-search", action="append", metavar="KEY=VALUE",
+                    help="search setting of the nominal run only, over --search (e.g. "
+                         "stop_on_success=false: the nominal run's best after every generation)")
     ap.add_argument("--out", default="/tmp/robust_bar")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
+    nominal_search = {**search, **_pairs(a.nominal_search, "--nominal-search")}
+    ntag = "".join(f"-{k}{v}" for k, v in sorted(_pairs(a.nominal_search, "-").items()))
     base = Path(a.out) / f"{a.task}-{a.controller}"
     tag = f"-k{a.starts}" + "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require))
                                      if v not in (0, 1.0))
@@ -129,9 +134,10 @@ def main(argv=None):
                   **({"confirm": a.confirm} if a.confirm else {}),
                   **({"require": a.require} if a.require != 1.0 else {})}
         for kind, robust in (("nominal", {}), ("robust", method)):
-            out = base / (f"{kind}-seed{seed}" if kind == "nominal" else f"{kind}{tag}-seed{seed}")
+            out = base / (f"{kind}{ntag}-seed{seed}" if kind == "nominal" else f"{kind}{tag}-seed{seed}")
             cfg = RunConfig(task=a.task, family=a.controller, seed=seed, params=dict(params),
-                            search=dict(search), robust=robust)
+                            search=dict(nominal_search if kind == "nominal" else search),
+                            robust=robust)
             row[f"{kind}_wall_s"] = round(one_run(cfg, out), 1)
             if kind == "robust":
                 row["robust_wall_s"] += round(extend(out, a.extend), 1)
