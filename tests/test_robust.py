@@ -264,3 +264,17 @@ def test_a_robust_serial_run_judges_mutants_and_parents_on_the_same_starts(tmp_p
     np.testing.assert_array_equal(again, search.scores)
     rows = (tmp_path / "r" / "log.csv").read_text().splitlines()[1:]
     assert [r.split(",")[0] for r in rows] == ["0", "1", "1", "2", "2", "3", "3", "4"]   # re-scores repeat g
+
+
+@pytest.mark.parametrize("name,rate", [("lamp_hop-robust-seed2", 0.97), ("starman_travel-robust-seed3", 0.98)])
+def test_the_documented_robust_controllers_keep_their_success_rate(name, rate):
+    """docs/composite.md's robustness bar: controllers evolved from perturbed starts,
+    judged from the same 100 starts (trial 0 nominal); a change to the simulator, the
+    perturbations or the judge that moves these rates must say so in the docs."""
+    from pathlib import Path
+    from gpmotion.compose.robust import robustness
+    from gpmotion.replay import load_controller
+    path = Path(__file__).resolve().parent.parent / "docs" / "notes" / "robust" / f"{name}.json"
+    task, family, actuation, genome, _ = load_controller(str(path))
+    r = robustness(task, family, actuation, genome, trials=100, seed=0)
+    assert r["nominal_success"] and r["success_rate"] == pytest.approx(rate, abs=0.015)
