@@ -219,6 +219,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                                                   cfg.family_options)
             if given is not None and given.task in (cfg.task, cfg.task.rsplit("-v", 1)[0]):
                 given.task = cfg.task                        # the bare name of the recorded task
+            _keep_legacy_noisy(rd, cfg)
             task, family, search, actuation = build(cfg)
             if given is not None:
                 check_resume_request(given, cfg, doc, search, rd.path)
@@ -256,6 +257,19 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
             if rd is not None:
                 rd.close()
     return search.best, search.best_cost, rd
+
+
+def _keep_legacy_noisy(rd: RunDir, cfg) -> None:
+    """A robust run checkpointed before ``fresh_scores`` existed (session 11) resumes
+    as it began: without them (its checkpoint's search settings name none)."""
+    if not cfg.robust or "fresh_scores" in cfg.search or not rd.has_checkpoint():
+        return
+    try:
+        settings = rd.load_checkpoint()["search"]["config"]
+    except (KeyError, TypeError, ValueError, OSError):
+        return                         # a bad checkpoint: _restore says what is wrong
+    if isinstance(settings, dict) and "fresh_scores" not in settings:
+        cfg.search = {**cfg.search, "fresh_scores": False}
 
 
 def _identity(doc: dict) -> dict:

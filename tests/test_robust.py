@@ -278,3 +278,26 @@ def test_the_documented_robust_controllers_keep_their_success_rate(name, rate):
     task, family, actuation, genome, _ = load_controller(str(path))
     r = robustness(task, family, actuation, genome, trials=100, seed=0)
     assert r["nominal_success"] and r["success_rate"] == pytest.approx(rate, abs=0.015)
+
+
+def test_a_robust_run_checkpointed_before_fresh_scores_resumes_as_it_began(tmp_path):
+    """A run recorded before fresh_scores existed (its config.json and checkpoint name
+    none) resumes with the semantics it began with: the same result as such a run
+    uninterrupted, not a refusal and not a run that changes rules halfway."""
+    import json as _json
+    from gpmotion.cli import main
+    from gpmotion.run import run
+    from gpmotion.runconfig import config_digest
+    old = _robust_cfg(search={"n_working": 4, "n_generations": 3, "fresh_scores": False})
+    run(old, tmp_path / "ref", quiet=True, artifacts=False)
+    cut = tmp_path / "cut"
+    run(old, cut, quiet=True, artifacts=False, max_generations=1, checkpoint_every=0)
+    conf = _json.loads((cut / "config.json").read_text())
+    del conf["run"]["search"]["fresh_scores"]                 # as the old code wrote them
+    (cut / "config.json").write_text(_json.dumps(conf))
+    ck = _json.loads((cut / "checkpoint.json").read_text())
+    assert "fresh_scores" not in ck["search"]["config"]
+    ck["config_digest"] = config_digest(conf)
+    (cut / "checkpoint.json").write_text(_json.dumps(ck))
+    assert main(["resume", str(cut), "--quiet"]) == 0
+    assert _records(cut)[:2] == _records(tmp_path / "ref")[:2] and _costs(cut) == _costs(tmp_path / "ref")
