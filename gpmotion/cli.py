@@ -410,7 +410,10 @@ def _summary(rd):
         print(f"{rd.path}: stopped before the end; `gpmotion resume {rd.path}` continues it")
         return
     rec = read_json(p, kind="best")
-    print(f"{rd.path}: best cost {rec['final_cost']:.4f}  "
+    robust = (read_json(rd.path / "config.json", kind="config").get("run") or {}).get("robust")
+    where = (f" from the nominal start ({rec['cost']:.4f}: the {robust.get('aggregate', 'mean')} "
+             f"over its {robust.get('starts')} perturbed starts in the run)") if robust else ""
+    print(f"{rd.path}: best cost {rec['final_cost']:.4f}{where}  "
           f"{'SOLVED' if rec['success'] else 'not solved'}  " + "; ".join(rec.get("facts", [])))
 
 

@@ -229,6 +229,11 @@ def test_robust_cli_options_and_their_errors(tmp_path, capsys):
     assert main(["run", "lamp_hop", "--param", "seconds=0.3", "--population", "6", "--generations", "2",
                  "--robust-starts", "2", "--robust-aggregate", "worst", "--perturb", "joint=0.2,angular=0",
                  "--out", str(out), "--quiet", "--no-artifacts"]) == 0
+    # the summary says which cost is which: best.json replays the nominal start
+    best = __import__("json").loads((out / "best.json").read_text())
+    said = capsys.readouterr().out
+    assert f"best cost {best['final_cost']:.4f} from the nominal start ({best['cost']:.4f}: the worst " \
+           "over its 2 perturbed starts in the run)" in said
     import json as _json
     rec = _json.loads((out / "config.json").read_text())["run"]
     assert rec["robust"]["aggregate"] == "worst" and rec["robust"]["joint"] == 0.2
