@@ -88,6 +88,10 @@ CONFIGS = {
                               "Beryl time-based, t_per = T, unguided"),
     "beryl-periodic-unguided": ("beryl_travel", "bsr-time", {}, {"t_per": 0.5},
                                 ("periodic shuffle",), "Beryl time-based, t_per = 0.5 s, unguided"),
+    # the paper's own Beryl configuration (t_per << T, no secondary term) with the τ floor
+    "beryl-periodic-unguided-tau": ("beryl_travel", "bsr-time", {}, {"t_per": 0.5, "bsr_dt": 0.1},
+                                    ("periodic shuffle",),
+                                    "Beryl time-based, t_per = 0.5 s, unguided, τ ≥ 0.2 s"),
 }
 WORKING, RESEED = 10, 200
 
