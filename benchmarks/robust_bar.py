@@ -70,22 +70,19 @@ def one_run(cfg: RunConfig, out: Path) -> float:
     return time.perf_counter() - t0
 
 
-def stopped(out: Path) -> bool:
-    """Did the run stop on success (GP ``stop_on_success``), rather than run out of generations?"""
-    return bool(json.loads((out / "checkpoint.json").read_text())["search"].get("stopped", False))
-
-
 def searched(out: Path) -> dict:
     """The finished search's rounds (GP generations, serial rounds: re-scores are not
-    rounds) and evaluations (controllers scored, re-scores included)."""
+    rounds), evaluations (controllers scored, re-scores included) and whether it
+    stopped on success (GP ``stop_on_success``) rather than ran out of generations."""
     st = json.loads((out / "checkpoint.json").read_text())["search"]
-    return {"generation": int(st["generation"]), "evaluations": int(st["evaluations"])}
+    return {"generation": int(st["generation"]), "evaluations": int(st["evaluations"]),
+            "stopped": bool(st.get("stopped", False))}
 
 
 def extend(out: Path, n: int) -> float:
     """Add n generations to a finished run that did not stop on success (once); seconds spent."""
     cfg = json.loads((out / "config.json").read_text())
-    if not n or stopped(out) or cfg.get("extended_generations") is not None:
+    if not n or searched(out)["stopped"] or cfg.get("extended_generations") is not None:
         return 0.0
     t0 = time.perf_counter()
     (out / "best.json").unlink()
@@ -121,8 +118,9 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     params, search = _pairs(a.param, "--param"), _pairs(a.search, "--search")
-    nominal_search = {**search, **_pairs(a.nominal_search, "--nominal-search")}
-    ntag = "".join(f"-{k}{v}" for k, v in sorted(_pairs(a.nominal_search, "-").items()))
+    nominal_own = _pairs(a.nominal_search, "--nominal-search")
+    nominal_search = {**search, **nominal_own}
+    ntag = "".join(f"-{k}{v}" for k, v in sorted(nominal_own.items()))
     base = Path(a.out) / f"{a.task}-{a.controller}"
     tag = f"-k{a.starts}" + "".join(f"-{k}{v}" for k, v in (("c", a.confirm), ("r", a.require))
                                      if v not in (0, 1.0))
@@ -141,9 +139,10 @@ def main(argv=None):
             row[f"{kind}_wall_s"] = round(one_run(cfg, out), 1)
             if kind == "robust":
                 row["robust_wall_s"] += round(extend(out, a.extend), 1)
-                row["robust_stopped"] = stopped(out)
-                row["robust_generations"] = searched(out)["generation"]
-            row[f"{kind}_evaluations"] = searched(out)["evaluations"]
+            done = searched(out)                     # after any extension
+            if kind == "robust":
+                row["robust_stopped"], row["robust_generations"] = done["stopped"], done["generation"]
+            row[f"{kind}_evaluations"] = done["evaluations"]
             row[f"{kind}_episodes"] = row[f"{kind}_evaluations"] * (a.starts if kind == "robust" else 1)
             row[kind] = judge(out, a.trials)
         rows.append(row)

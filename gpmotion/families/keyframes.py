@@ -73,7 +73,7 @@ class CMAESSearch(GenerationalSearch):
         if not isinstance(fresh_scores, bool):
             raise ValueError(f"CMAESSearch: fresh_scores must be true or false, got {fresh_scores!r}")
         # robust starts: costs of two generations are not comparable, the best is the latest's
-        self.fresh_scores = self.final.per_round = fresh_scores
+        self._set_fresh_scores(fresh_scores)
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise ValueError(f"CMAESSearch: seed must be an integer, got {seed!r}")
         if population is not None and (isinstance(population, bool)
@@ -124,7 +124,7 @@ class CMAESSearch(GenerationalSearch):
         self.told.append(c.tolist())
         self._told_costs = c
         i = int(np.argmin(c))                    # first of equal minima
-        phase = self.phase_of(self.generation) + ((float(self.generation),) if self.fresh_scores else ())
+        phase = self.judged_phase(self.generation)
         if self._best is None or phase != self._best_phase or c[i] < self._best_cost:
             self._best = self.family.denormalize(x[i])
             self._best_cost, self._best_phase = float(c[i]), phase
@@ -171,7 +171,7 @@ class CMAESSearch(GenerationalSearch):
         cfg = state["config"]
         self.seed, self.sigma0 = int(cfg["seed"]), float(cfg["sigma0"])
         self.generations = int(cfg["generations"])
-        self.fresh_scores = self.final.per_round = bool(cfg.get("fresh_scores", False))
+        self._set_fresh_scores(cfg.get("fresh_scores", False))
         self._start(int(cfg["population"]))
         told = state["told"]
         if not isinstance(told, list) or len(told) > 10**7:

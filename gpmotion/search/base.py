@@ -171,6 +171,16 @@ class Search:
             c = min(c, self.final.value)
         return c
 
+    # -- noisy costs (robust starts redrawn every round) --------------------------
+    fresh_scores = False      # costs are comparable within one round only
+
+    def _set_fresh_scores(self, on: bool) -> None:
+        self.fresh_scores = self.final.per_round = bool(on)
+
+    def judged_phase(self, generation: int) -> tuple:
+        """What costs must share to be compared: the phase, and with fresh scores the round."""
+        return self.phase_of(generation) + ((float(generation),) if self.fresh_scores else ())
+
     def phase_at(self, progress: float) -> tuple:
         return () if self.task is None else tuple(self.task.phase(progress))
 

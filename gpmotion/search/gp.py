@@ -182,7 +182,7 @@ class GPSearch(GenerationalSearch):
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
         self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
         self.stop_on_success = bool(c["stop_on_success"])
-        self.fresh_scores = self.final.per_round = bool(c["fresh_scores"])
+        self._set_fresh_scores(c["fresh_scores"])
         self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
 
     def config(self) -> dict:
@@ -222,11 +222,6 @@ class GPSearch(GenerationalSearch):
                 self._set_population(self._breed())
             self.generation += 1
         self.generations = max(self.generations, total)
-
-    def _best_phase_of(self, generation: int) -> tuple:
-        """What the hall of fame's cost depends on: the phase, and with fresh scores
-        (robust starts) the generation too, so the best is this generation's."""
-        return self.phase_of(generation) + ((float(generation),) if self.fresh_scores else ())
 
     def _cache_phase(self, generation: int) -> tuple:
         return self.phase_of(generation) if self.reuse_costs else (float(generation),)
@@ -303,7 +298,7 @@ class GPSearch(GenerationalSearch):
     def _record(self, n_evaluated: int, evaluation) -> None:
         c = self._told_costs = self.costs           # the population's costs (breeding resets them)
         i = int(np.argmin(c))                    # first of equal minima
-        phase = self._best_phase_of(self.generation)
+        phase = self.judged_phase(self.generation)    # with fresh scores: this generation's best
         cost = float(c[i])
         self.generation_best.append({"generation": self.generation, "progress": self.progress,
                                      "cost": cost, "genome": [list(t) for t in self._keys[i]]})
@@ -347,7 +342,7 @@ class GPSearch(GenerationalSearch):
         if ok.size:
             i = int(ok[np.argmin(costs[ok])])
             self._best_key, self.hof_cost = self._pending[i], float(costs[i])
-            self.best_generation, self._best_phase = self.generation, self._best_phase_of(self.generation)
+            self.best_generation, self._best_phase = self.generation, self.judged_phase(self.generation)
             self.stopped = True
 
     def _island_bounds(self) -> list[tuple[int, int]]:

@@ -132,8 +132,7 @@ class SerialSearch(Search):
         self.phase_steps = int(phase_steps)
         if not isinstance(fresh_scores, (bool, np.bool_)):
             raise ValueError(f"fresh_scores must be true or false, got {fresh_scores!r}")
-        self.fresh_scores = bool(fresh_scores)
-        self.final.per_round = self.fresh_scores     # no best picked by the luck of its starts
+        self._set_fresh_scores(fresh_scores)         # no best picked by the luck of its starts
         self.phase = None              # phase the working scores and best_score are of
         self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
@@ -194,8 +193,7 @@ class SerialSearch(Search):
 
     def current_phase(self) -> tuple:
         """Phase of the round ``ask`` hands out next (with fresh scores, the round too)."""
-        own = (float(self.generation),) if self.fresh_scores else ()
-        return self.phase_of(self.generation) + own
+        return self.judged_phase(self.generation)
 
     def _stale(self) -> bool:
         return self.current_phase() != self.phase
@@ -323,8 +321,7 @@ class SerialSearch(Search):
         self.n_working, self.n_generations = int(cfg["n_working"]), int(cfg["n_generations"])
         self.reseed_every = int(cfg["reseed_every"])
         self.accept_ties = bool(cfg["accept_ties"])
-        self.fresh_scores = bool(cfg.get("fresh_scores", False))   # absent before robust re-scores
-        self.final.per_round = self.fresh_scores
+        self._set_fresh_scores(cfg.get("fresh_scores", False))   # absent before robust re-scores
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.rng.bit_generator.state = state["rng"]
         opt = lambda xs, f: None if xs is None else [f(x) for x in xs]  # noqa: E731
