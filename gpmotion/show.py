@@ -74,6 +74,9 @@ def describe_task(name: str) -> str:
         lines.append(_wrap("held at their neutral pose by PD", held))
     lines += [_wrap("sites", fig.site_names), _wrap("contacts", fig.contact_names),
               _wrap("GP terminals (senses)", task.terminal_names()),
+              *(f"  task sense {ts.name}" + (f" ({ts.doc})" if ts.doc else "")
+                + ("" if ts.name in task.terminal_names() else "; not a terminal by default")
+                + f":\n    {ts.formula}" for ts in task.task_senses()),
               _wrap("GP primitives (the task's set; --primitives to change)", task.primitives),
               _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
               f"GP search defaults: {gp_defaults or 'population 300, generations 40'}",

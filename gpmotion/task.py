@@ -196,7 +196,8 @@ class Task:
         needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
                  ("site", base.site_names, fig.site_names),
                  ("contact", base.contact_names, fig.contact_names),
-                 ("sense", self.terminals or (), fig.sense_names))
+                 ("sense", [n for n in self.terminals or ()
+                            if n not in {s.name for s in self.task_senses()}], fig.sense_names))
         missing = [f"{kind} {n!r}" for kind, names, have in needs for n in names if n not in have]
         if missing:
             raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "
@@ -244,6 +245,11 @@ class Task:
         """Which episodes solve the task (bool per episode)."""
         return np.zeros(traj.n_episodes, dtype=bool)
 
+    def task_senses(self) -> tuple:
+        """Terminals derived from the figure's senses (gpmotion.gp.task_senses.TaskSense:
+        a name and a formula); a task names the ones its trees read in ``terminals``."""
+        return ()
+
     def describe(self, traj, measures) -> list[str]:
         """Short human-readable facts about one episode (gait, hits...)."""
         return []
@@ -278,8 +284,10 @@ class Task:
 
     def terminal_names(self) -> list[str]:
         names = list(self.terminals) if self.terminals is not None else list(self.figure.sense_names)
+        derived = {s.name for s in self.task_senses()}
         for n in names:
-            self.figure.sense_index(n)        # raises on an unknown sense
+            if n not in derived:
+                self.figure.sense_index(n)    # raises on an unknown sense
         return names
 
     def params_at(self, progress: float) -> dict:

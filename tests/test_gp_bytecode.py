@@ -25,6 +25,7 @@ from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, RATE_STATE, S
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.pset import build_pset, compile_reference
 from gpmotion.gp.subgoals import MAX_SUBGOALS
+from gpmotion.gp.task_senses import MAX_TASK_SENSES
 
 REF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "reference", "gp_interpreter_ref.py")
 _spec = importlib.util.spec_from_file_location("gp_interpreter_ref", REF)
@@ -162,7 +163,7 @@ def test_batch_control_writes_only_its_actuators(info, kernel, trees):
     inds = [trees[i:i + 3] for i in range(0, 30, 3)] + [trees[:1] * 3]
     batch = encode_batch(inds, info, acts)
     assert batch.module == str(interpreter_path(info))
-    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS + RATE_STATE + 3
+    assert batch.ci.shape[0] == len(inds) and batch.cstate_size == STACK_CAP + MAX_SUBGOALS + MAX_TASK_SENSES + RATE_STATE + 3
     funcs, selects = funcs_selects(info)
     s = np.random.default_rng(1).normal(size=len(SENSES))
     for r in range(batch.n_episodes):

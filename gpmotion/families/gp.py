@@ -21,6 +21,7 @@ from ..gp.operators import random_tree
 from ..gp.primitives import CLAMP
 from ..gp.pset import build_pset
 from ..gp.subgoals import subgoal_table, task_subgoals
+from ..gp.task_senses import compile_formula, task_senses
 from ..search.gp import GPSearch
 from .base import Family, register_family
 
@@ -117,6 +118,10 @@ _OWN = dict([
                "MODE,JOINT=MODE,... e.g. rate,elbow_r=angle; default: the task's choice "
                "(gpmotion show TASK)",
                "the GP target mode", dict(type=str, metavar="MODE[,JOINT=MODE...]"), _targets),
+    _gp_option("--subgoals", "family", "subgoals",
+               "the task's subgoal flags are GP terminals too: 0 until the subgoal is first "
+               "met, then 1 (lamp_hop: arrived; lamp_limbo: passed_pole, arrived)",
+               "GP subgoal terminals", dict(action="store_const", const=True)),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
                "the GP target time constant", dict(type=float), number(0.002, 10),
@@ -182,10 +187,16 @@ class GPFamily(Family):
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         _check_erc_range(self.options["erc_range"])
-        self.info = build_pset(list(terminals) if terminals is not None else task.terminal_names(),
-                               primitives or task.primitives,     # the task names its set
+        terms = list(terminals) if terminals is not None else task.terminal_names()
+        prims = primitives or task.primitives                     # the task names its set
+        declared = {s.name: s for s in (task_senses(task, prims) if task.task_senses() else ())}
+        used = [declared[t] for t in terms if t in declared]      # computed only if a tree may read it
+        self.info = build_pset([t for t in terms if t not in declared], prims,
                                sense_names=task.figure.sense_names, erc_range=tuple(erc_range),
-                               flag_names=[g.name for g in goals])
+                               flag_names=[g.name for g in goals],
+                               task_sense_names=[s.name for s in used])
+        self.task_programs = [compile_formula(s.tree, task.figure.sense_names,
+                                              self.info.primitive_names) for s in used]
         self.actuators = task.controlled_actuators()
         self.options["targets"] = targets = targets or task.gp_targets
         self.law = target_law(task, self.actuators, targets)
@@ -208,7 +219,8 @@ class GPFamily(Family):
 
     def encode(self, genomes):
         return bytecode.encode_batch(list(genomes), self.info, self.actuators,
-                                     subgoals=self.subgoal_table, law=self.law)
+                                     subgoals=self.subgoal_table, law=self.law,
+                                     task_programs=self.task_programs)
 
     def copy(self, genome):
         return [list(t) for t in genome]

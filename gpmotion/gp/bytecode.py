@@ -12,24 +12,27 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
                      (a TargetLaw: rate or pi targets, gpmotion.gp.targets), else 0
     ci[4]            ci[3] == 1: offset in cf of the law block, LAW_WIDTH numbers
                      a tree: [mode code (index in TARGET_MODES), gain, a, b]
-    ci[5 + 3k + 0]   actuator index driven by tree k
-    ci[5 + 3k + 1]   start offset in ci of tree k's op stream
-    ci[5 + 3k + 2]   number of ops of tree k
-    ci[5 + 3n + 3j]  subgoal j: sense index, test code, index in cf of its
-                     threshold (n = n_trees)
+    ci[5]            m = n_task_senses (gpmotion.gp.task_senses)
+    ci[6 + 3k + 0]   actuator index driven by tree k (-1: task sense k - n)
+    ci[6 + 3k + 1]   start offset in ci of tree k's op stream
+    ci[6 + 3k + 2]   number of ops of tree k; k < n the trees, then the m
+                     task senses' programs (n = n_trees)
+    ci[6 + 3(n+m) + 3j]  subgoal j: sense index, test code, index in cf of
+                     its threshold
     then ops, two ints each: (opcode, operand)
         opcode 0     push clamp(senses[operand])
         opcode 1     push cf[operand]          (a constant)
         opcode 2     jump: skip the next ``operand`` ops (forward only)
-        opcode 3     push subgoal flag ``operand`` (0.0 or 1.0)
+        opcode 3     push controller slot ``operand``: subgoal flag j (0.0
+                     or 1.0) in slot j, task sense j in slot MAX_SUBGOALS + j
         opcode 4+k   primitive k of the pset; operand 0: pop all its
                      arguments, push its result; operand 1 (conditionals
                      only): pop its selectors and go to the branch taken
                      through the jump table that follows (``_branch_layout``)
 
 A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
-interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots, then (with a
-law) the previous step's time, a started flag and one value per tree (rate:
+interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots,
+MAX_TASK_SENSES task-sense slots, then (with a law) the previous step's time, a started flag and one value per tree (rate:
 the target; pi: the integral).
 
 Tokens (the genome format, DESIGN "Formats and safety"): a tree is its
@@ -54,6 +57,7 @@ from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # no
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
 from gpmotion.gp.subgoals import MAX_SUBGOALS
+from gpmotion.gp.task_senses import MAX_TASK_SENSES
 
 MAX_TREE_SIZE = 512     # token/node cap for parsing genomes
 MAX_TREE_DEPTH = 17     # Koza's depth limit
@@ -167,19 +171,26 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
 
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
-                 law: TargetLaw | None = None):
+                 law: TargetLaw | None = None, task_programs: Sequence = ()):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
     ``info`` (:func:`gpmotion.gp.subgoals.subgoal_table`), in its order;
-    ``law``: how the trees drive their targets (None: as angles)."""
+    ``law``: how the trees drive their targets (None: as angles);
+    ``task_programs``: (ops, constants, stack need) per task sense of
+    ``info`` (:func:`gpmotion.gp.task_senses.compile_formula`), in its order."""
     if len(trees) != len(actuator_indices):
         raise ValueError(f"{len(trees)} trees but {len(actuator_indices)} actuator indices")
     if len(subgoals) != len(info.flag_names):
         raise ValueError(f"{len(subgoals)} subgoal tests for {len(info.flag_names)} subgoal terminals")
+    if len(task_programs) != len(info.task_sense_names) or len(task_programs) > MAX_TASK_SENSES:
+        raise ValueError(f"{len(task_programs)} task sense programs for "
+                         f"{len(info.task_sense_names)} task senses")
     n = len(trees)
     compiled = [_compiled(t, info, lazy) for t in trees]
-    ci = [n, max((c[2] for c in compiled), default=0), len(subgoals), 0, 0] + [0] * (3 * n)
+    programs = compiled + [tuple(p) for p in task_programs]
+    ci = ([n, max((c[2] for c in programs), default=0), len(subgoals), 0, 0, len(task_programs)]
+          + [0] * (3 * len(programs)))
     cf: list[float] = []
     if law is not None:
         if not len(law.modes) == len(law.gain) == len(law.a) == len(law.b) == n:
@@ -189,7 +200,8 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
     for sense, code, threshold in subgoals:
         ci += [int(sense), int(code), len(cf)]
         cf.append(float(threshold))
-    for k, ((ops, consts, _), act) in enumerate(zip(compiled, actuator_indices)):
+    acts = list(actuator_indices) + [-1] * len(task_programs)
+    for k, ((ops, consts, _), act) in enumerate(zip(programs, acts)):
         ci[HEADER + 3 * k: HEADER + 3 * k + 3] = [int(act), len(ci), len(ops)]
         base = len(cf)
         for op, arg in ops:
@@ -221,17 +233,18 @@ def _compiled(t, info: PsetInfo, lazy: bool):
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
-                 lazy: bool = True, subgoals=(), law: TargetLaw | None = None
-                 ) -> ControllerBatch:
+                 lazy: bool = True, subgoals=(), law: TargetLaw | None = None,
+                 task_programs=()) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
     as in :func:`compile_tree` (the eager form is for benchmarks); ``law``
-    as in :func:`encode_trees`.
+    and ``task_programs`` as in :func:`encode_trees`.
     """
     if module is None:
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law) for ind in individuals]
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs)
+            for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
     ci = np.zeros((len(rows), li), dtype=np.int64)
@@ -241,7 +254,8 @@ def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
         cf[i, :len(b)] = b
     n_trees = max([len(ind) for ind in individuals] + [0])
     return ControllerBatch(module=str(module), ci=ci, cf=cf,
-                           cstate_size=STACK_CAP + MAX_SUBGOALS + RATE_STATE + n_trees)
+                           cstate_size=STACK_CAP + MAX_SUBGOALS + MAX_TASK_SENSES + RATE_STATE
+                           + n_trees)
 
 
 # ---------------------------------------------------------------- tokens

@@ -3,12 +3,15 @@ the interpreter it generates (gpmotion.gp.interpreter); the layout they
 describe is in bytecode's docstring."""
 
 STACK_CAP = 64          # interpreter stack = cstate; trees needing more are rejected
-HEADER = 5              # ci[0:5] = n_trees, max stack need, n_flags, law flag, law block
+HEADER = 6              # ci[0:6] = n_trees, max stack need, n_flags, law flag, law block,
+#                         n_task_senses
 # what a tree's output is (gpmotion.gp.bytecode, gpmotion.gp.targets), in code order
 TARGET_MODES = {"angle": "a tree's output is its joint's target angle",
                 "rate": "a tree's output drives its target's rate of change: integral action",
                 "pi": "a tree's output is its joint's angle, reached without the PD servo's sag "
                       "(an integral term corrects the target)"}
+# OP_PUSH_FLAG reads a value the controller keeps: subgoal flag j (j < MAX_SUBGOALS)
+# or task sense j - MAX_SUBGOALS
 OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PUSH_FLAG, OP_PRIM0 = 0, 1, 2, 3, 4
 LAW_WIDTH = 4           # law block per tree: mode code, gain, a, b
 RATE_STATE = 2          # rate/pi cstate slots before one value a tree: previous t, started

@@ -13,6 +13,8 @@ config.json, so a run resumes without knowing presets.
 * terminals: the lamp's position relative to the goal, its velocity, the
   force on its base from the floor, time, and random constants -- not our
   19 senses (joint angles and rates, pitch, centre of mass, head forces);
+  task senses the task adds to its terminals (``lamp_limbo --param
+  pole_senses=1``) are kept, as the paper proposes such senses;
 * fitness-proportionate selection, 90 % crossover and the rest reproduction,
   no mutation, no constant creep, no elitism, one population;
 * the run stops when an individual solves the task (the paper's termination
@@ -49,7 +51,8 @@ def preset_options(name: str, task) -> tuple[dict, dict]:
         if not terms:
             raise ValueError(f"preset gritz-hahn needs a task that declares the paper's terminal "
                              f"set (paper_terminals: lamp_hop, lamp_limbo); {task.name} does not")
-        fam["terminals"] = list(terms)
+        derived = {s.name for s in task.task_senses()}    # task senses the task adds stay
+        fam["terminals"] = list(terms) + [t for t in task.terminal_names() if t in derived]
     return fam, search
 
 

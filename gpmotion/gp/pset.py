@@ -22,6 +22,7 @@ from deap import gp
 
 from gpmotion.cache import digest
 from gpmotion.gp import primitives as registry
+from gpmotion.gp.subgoals import MAX_SUBGOALS
 
 
 @dataclass(frozen=True)
@@ -29,13 +30,16 @@ class PsetInfo:
     """A DEAP primitive set plus what bytecode and interpreter need to agree on."""
     pset: gp.PrimitiveSet
     primitive_names: tuple[str, ...]   # opcode 2 + k  <->  primitive_names[k]
-    terminal_names: tuple[str, ...]    # pset arguments, in order (senses, then subgoal flags)
+    terminal_names: tuple[str, ...]    # pset arguments, in order (senses, subgoal flags,
+    #                                    task senses)
     sense_indices: tuple[int, ...]     # terminal k reads senses[i], i = sense_indices[k];
-    #                                    i < 0: subgoal flag -1 - i
+    #                                    i < 0: controller slot -1 - i (subgoal flag j
+    #                                    in slot j, task sense j in MAX_SUBGOALS + j)
     erc_name: str
     erc_range: tuple[float, float]
     hash: str                          # primitive names + sources + terminals
-    flag_names: tuple[str, ...] = ()   # subgoal terminals (the last len(flag_names) ones)
+    flag_names: tuple[str, ...] = ()   # subgoal terminals (after the senses)
+    task_sense_names: tuple[str, ...] = ()   # task senses (the last ones; gp.task_senses)
 
     @property
     def primitives(self) -> list[registry.Primitive]:
@@ -63,13 +67,14 @@ def pset_hash(primitive_names: Sequence[str], terminal_names: Sequence[str],
 def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | None = None,
                *, sense_names: Sequence[str] | None = None,
                erc_range: tuple[float, float] = (-1.0, 1.0), name: str = "MAIN",
-               flag_names: Sequence[str] = ()) -> PsetInfo:
+               flag_names: Sequence[str] = (), task_sense_names: Sequence[str] = ()) -> PsetInfo:
     """Primitive set over ``primitive_names`` in that order (opcode order;
     default :data:`gpmotion.gp.primitives.STANDARD`) and terminals.
 
     ``sense_names`` is the full raw sense vector layout (``Figure.sense_names``);
     when omitted, terminal k reads ``senses[k]``.  ``flag_names``: subgoal
-    terminals appended after the senses (gpmotion.gp.subgoals).
+    terminals appended after the senses (gpmotion.gp.subgoals);
+    ``task_sense_names``: task senses after them (gpmotion.gp.task_senses).
     """
     registry.load_builtin()
     prim_names = tuple(registry.STANDARD if primitive_names is None else primitive_names)
@@ -77,7 +82,7 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
         registry.get(n)                       # clear error for unknown names
     if len(set(prim_names)) != len(prim_names):
         raise ValueError(f"repeated primitive names in {prim_names}")
-    flags = tuple(flag_names)
+    flags = tuple(flag_names) + tuple(task_sense_names)      # the controller's slots
     terms = tuple(terminal_names) + flags
     if len(terms) == len(flags):
         raise ValueError("a primitive set needs at least one terminal (sense) name")
@@ -95,7 +100,8 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
             raise ValueError(f"terminals {missing} are not senses of this figure "
                              f"(senses: {', '.join(sense_names)})")
         idx = tuple(sense_names.index(t) for t in terms[:len(terms) - len(flags)])
-    idx += tuple(-1 - j for j in range(len(flags)))
+    idx += tuple(-1 - j for j in range(len(flag_names)))
+    idx += tuple(-1 - MAX_SUBGOALS - j for j in range(len(task_sense_names)))
     lo, hi = float(erc_range[0]), float(erc_range[1])
     h = pset_hash(prim_names, terms, idx, (lo, hi))
 
@@ -107,17 +113,21 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
     func = _ERC_FUNCS.setdefault(erc_name, functools.partial(random.uniform, lo, hi))
     pset.addEphemeralConstant(erc_name, func)
     pset.renameArguments(**{f"ARG{i}": t for i, t in enumerate(terms)})
-    return PsetInfo(pset, prim_names, terms, idx, erc_name, (lo, hi), h, flags)
+    return PsetInfo(pset, prim_names, terms, idx, erc_name, (lo, hi), h, tuple(flag_names),
+                    tuple(task_sense_names))
 
 
 def compile_reference(tree, info: PsetInfo) -> Callable:
-    """``deap.gp.compile`` with the interpreter's semantics: f(senses, flags=()) -> float
-    (``flags``: the subgoal flags' values; missing ones read 0.0)."""
+    """``deap.gp.compile`` with the interpreter's semantics: f(senses, flags=(),
+    task_values=()) -> float (``flags``: the subgoal flags' values,
+    ``task_values`` the task senses'; missing ones read 0.0)."""
     f = gp.compile(tree, info.pset)
     idx = info.sense_indices
 
-    def run(senses, flags=()):
-        flags = list(flags) + [0.0] * (len(info.flag_names) - len(flags))
-        return registry.clamp(f(*(registry.clamp(senses[i]) if i >= 0 else float(flags[-1 - i])
+    def run(senses, flags=(), task_values=()):
+        slots = [0.0] * (MAX_SUBGOALS + len(info.task_sense_names))
+        slots[:len(flags)] = map(float, flags)
+        slots[MAX_SUBGOALS:MAX_SUBGOALS + len(task_values)] = map(float, task_values)
+        return registry.clamp(f(*(registry.clamp(senses[i]) if i >= 0 else slots[-1 - i]
                                   for i in idx)))
     return run

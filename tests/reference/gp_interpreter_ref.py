@@ -3,19 +3,22 @@
 Reads the same (ci, cf) layout (see gpmotion.gp.bytecode) and applies the
 same value rule: senses and primitive results pass through ``clamp``
 (NaN -> 0, saturate to +-1e6); a malformed stream gives 0.0.  Opcodes:
-0 push sense, 1 push constant, 2 jump forward, 3 push subgoal flag,
+0 push sense, 1 push constant, 2 jump forward, 3 push a controller slot
+(subgoal flag j in slot j, task sense j in slot MAX_SUBGOALS + j),
 4 + k primitive k (operand
 0: apply; operand 1: a conditional's selection: branch 0 skips the jump
 table that follows, branch j > 0 takes the table's jump j - 1).
 """
 from gpmotion.gp.primitives import clamp
 
-HEADER = 5      # n_trees, max stack, n_flags, target mode, offset of rate data
+HEADER = 6      # n_trees, max stack, n_flags, target mode, offset of rate data, n_task_senses
+MAX_SUBGOALS = 8
 
 
 def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, flags=()):
     """funcs[k] is the Python function of opcode 4 + k; selects[k] its selector
-    positions (empty: not a conditional); flags: the subgoal flags' values."""
+    positions (empty: not a conditional); flags: the controller's slots
+    (subgoal flags, then from MAX_SUBGOALS the task senses)."""
     selects = selects or [()] * len(funcs)
     h = HEADER + 3 * tree_index
     pos, n_ops = int(ci[h + 1]), int(ci[h + 2])
@@ -71,7 +74,7 @@ def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, 
 
 def update_flags_ref(ci, cf, senses, flags):
     """Latch subgoal flag j once its test holds: 0 sense > thr, 1 <, 2 |sense| <."""
-    b = HEADER + 3 * int(ci[0])
+    b = HEADER + 3 * (int(ci[0]) + int(ci[5]))
     for j in range(int(ci[2])):
         v, code, thr = senses[int(ci[b + 3 * j])], int(ci[b + 3 * j + 1]), cf[int(ci[b + 3 * j + 2])]
         if (v > thr, v < thr, abs(v) < thr)[code]:
@@ -89,8 +92,10 @@ def control_ref(ci, cf, senses, targets, funcs, selects=None, flags=None, t=0.0,
     flags = [0.0] * int(ci[2]) if flags is None else flags
     update_flags_ref(ci, cf, senses, flags)
     n = int(ci[0])
+    slots = list(flags) + [0.0] * (MAX_SUBGOALS - len(flags))
+    slots += [run_tree_ref(ci, cf, n + j, senses, funcs, selects) for j in range(int(ci[5]))]
     acts = [int(ci[HEADER + 3 * k]) for k in range(n)]
-    outs = [run_tree_ref(ci, cf, k, senses, funcs, selects, flags=flags) for k in range(n)]
+    outs = [run_tree_ref(ci, cf, k, senses, funcs, selects, flags=slots) for k in range(n)]
     if int(ci[3]) == 0:
         for a, v in zip(acts, outs):
             targets[a] = v
