@@ -115,6 +115,10 @@ def main(argv=None):
     ap.add_argument("--script", help="a script file instead of Table 4 with the controllers' durations")
     ap.add_argument("--composite", help="a composite file (per-phase scenes) instead of three controllers; "
                                         "needs --script")
+    ap.add_argument("--refine", help="then refine these phases' controllers (comma list; "
+                                     "gpmotion.compose.refine), switch times fixed")
+    ap.add_argument("--refine-rounds", type=int, default=16)
+    ap.add_argument("--refine-mutants", type=int, default=16)
     a = ap.parse_args(argv)
     if a.composite:
         if a.controllers or not a.script:
@@ -142,24 +146,41 @@ def main(argv=None):
           f"{cpu:.1f} s CPU (load average {load:.1f}; Q={a.Q}, G={a.G}, H={a.H}, seed {a.seed})")
     fixed = optimize.repaired(comp, ts)
     repaired, traj1 = report("repaired", fixed, s, fixed.switches)
+    refined = None
     C.save(out / "careless.json", comp)
     C.save(out / "repaired.json", fixed)
+    if a.refine:
+        from gpmotion.compose.refine import refine
+        t0, c0 = time.perf_counter(), time.process_time()
+        fixed, climbs = refine(fixed, s, [p for p in a.refine.split(",") if p], rounds=a.refine_rounds,
+                               mutants=a.refine_mutants, seed=a.seed)
+        rwall, rcpu = time.perf_counter() - t0, time.process_time() - c0
+        n = sum(c["evaluations"] for c in climbs.values())
+        print(f"refinement of {a.refine}: {n} simulations in {rwall:.1f} s wall, {rcpu:.1f} s CPU; "
+              + "; ".join(f"{k}: {c['before']:.4f} -> {c['after']:.4f} ({c['accepted']} accepted)"
+                          for k, c in climbs.items()))
+        refined, traj1 = report("refined", fixed, s, fixed.switches)
+        refined.update(climbs=climbs, refine_seconds=rwall, refine_cpu_seconds=rcpu)
+        from gpmotion.compose.refine import save_refined
+        fixed = save_refined(out, fixed, climbs)
+        C.save(out / "refined.json", fixed)
     try:
         if any(sc is not None for sc in comp.phase_scene_settings):    # per-phase scenes: a strip each
             from gpmotion.compose.playback import render
             _, _, tr0, b0 = optimize.score(comp, s, [comp.switches])
             render(comp, tr0, b0[0], out / "careless.png")
             _, _, tr1, b1 = optimize.score(fixed, s, [fixed.switches])
-            render(fixed, tr1, b1[0], out / "repaired.png")
+            render(fixed, tr1, b1[0], out / ("refined.png" if refined else "repaired.png"))
         else:
             from gpmotion.render3d import render_any
             render_any(traj0, out / "careless.png", None, title="careless concatenation (Fig. 13)")
-            render_any(traj1, out / "repaired.png", None, title="after the transition search (Fig. 14)")
+            render_any(traj1, out / ("refined.png" if refined else "repaired.png"), None,
+                       title="after the transition search (Fig. 14)" + (" and refinement" if refined else ""))
     except Exception as e:          # pictures are a bonus; the numbers are the result
         print(f"(no filmstrips: {e})")
     summary = {"controllers": a.controllers or [p.source for p in comp.parts], "script": text, "seed": a.seed, "Q": a.Q, "G": a.G, "H": a.H,
                "simulations": ts.evaluations, "search_seconds": wall, "search_cpu_seconds": cpu, "careless": careless,
-               "repaired": repaired}
+               "repaired": repaired, **({"refined": refined} if refined else {})}
     if comp.figure.name != "lamp":
         summary["done_ranges"] = {k: [lo, str(hi)] for k, (lo, hi) in DONE.items()}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))

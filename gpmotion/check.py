@@ -227,7 +227,8 @@ def check_family(family, *, task: str = "lamp_hop", seconds: float = 0.3, seed: 
     Checks its declaration (actuation, search class, CLI options), then on
     ``task``: random genomes are deterministic for a seed, survive safe JSON
     and ``copy`` unchanged, garbage is refused with a ValueError, the batch
-    encodes and rolls out to finite costs twice alike; its search under a
+    encodes and rolls out to finite costs twice alike, ``mutate`` (where a
+    family has one) is deterministic and gives valid genomes; its search under a
     small budget asks, is told, writes a log row, and resumes exactly from
     a JSON round trip of its ``state_dict``.  Raises AssertionError naming
     the problem.
@@ -282,7 +283,26 @@ def check_family(family, *, task: str = "lamp_hop", seconds: float = 0.3, seed: 
         raise AssertionError(f"{name}: costs must be finite and repeat exactly: {a.costs} {b.costs}")
     if a.extras is not None and len(a.extras) != n_genomes:
         raise AssertionError(f"{name}: extras must be None or one per genome")
+    _check_family_mutate(name, fam, genomes, a.extras, seed)
     _check_family_search(name, fam, ev, seed, json)
+
+
+def _check_family_mutate(name, fam, genomes, extras, seed) -> None:
+    """``mutate`` (optional: what a composite's phase refinement climbs with) is
+    deterministic for a seed and gives a valid, different genome (callers
+    pass it a copy: it may change its argument)."""
+    from gpmotion.families.base import Family
+    if type(fam).mutate is Family.mutate:
+        return
+    g, extra = genomes[0], extras[0] if extras is not None else None
+    before = fam.to_json(g)
+    m1, m2 = (fam.mutate(fam.copy(g), np.random.default_rng(seed), extra) for _ in range(2))
+    if fam.to_json(m1) != fam.to_json(m2):
+        raise AssertionError(f"{name}: mutate(genome, rng) differs for the same seed")
+    _json_round_trip(fam, m1, f"{name}, mutated genome")
+    rng = np.random.default_rng(seed)
+    if all(fam.to_json(fam.mutate(fam.copy(g), rng, extra)) == before for _ in range(5)):
+        raise AssertionError(f"{name}: five mutations all gave the genome back")
 
 
 def _check_family_search(name, fam, ev, seed, json) -> None:

@@ -3,6 +3,7 @@
     gpmotion compose SCRIPT --controllers A.json B.json C.json [--transitions 1.6,2.5]
     gpmotion compose SCRIPT --composite careless.json [--out DIR] [--resume]
     gpmotion compose SCRIPT --controllers ... --no-search        # score the given switches only
+    gpmotion compose SCRIPT --controllers ... --refine limbo     # then refine a phase's controller
 
 cli.py registers it (``add_arguments`` and ``run_command``); ``python -m gpmotion.compose``
 runs the same command.
@@ -33,6 +34,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", help="run directory (default runs/compose-SCRIPT-seedN)")
     p.add_argument("--resume", action="store_true", help="continue the run directory's search")
     p.add_argument("--no-search", action="store_true", help="only score the given switch times")
+    p.add_argument("--refine", metavar="PHASE,...",
+                   help="after the search, refine these phases' controllers in place: a (1 + λ) "
+                        "climb from each, scored by the whole composite (off by default)")
+    p.add_argument("--refine-rounds", type=int, metavar="R", help="rounds of each refinement (default 16)")
+    p.add_argument("--refine-mutants", type=int, metavar="M",
+                   help="mutants of the incumbent a round (default 16)")
     p.add_argument("--no-artifacts", action="store_true", help="skip the filmstrips")
     p.add_argument("--quiet", action="store_true")
 
@@ -64,6 +71,7 @@ def run_command(args) -> int:
                                    f"but {len(args.controllers)} controller(s) were given")
         comp = C.from_controllers(args.controllers, switches, args.seconds, names=script.phases)
     optimize.check_match(comp, script)
+    refine = _refine_settings(args, script)
     say = (lambda m: None) if args.quiet else print
     if args.no_search:
         totals, credits, traj, _ = optimize.score(comp, script, [comp.switches])
@@ -72,8 +80,9 @@ def run_command(args) -> int:
         return 0
     out = Path(args.out or f"runs/compose-{Path(args.script).stem}-seed{args.seed}")
     result = session.compose_run(out, text, comp, Q=args.arrays, G=args.rounds, H=args.mutations,
-                                 seed=args.seed, perturb=args.perturb, resume=args.resume, log=say)
-    for key in ("careless", "best"):
+                                 seed=args.seed, perturb=args.perturb, resume=args.resume, log=say,
+                                 refine=refine)
+    for key in ("careless", "searched", "best") if refine else ("careless", "best"):
         r = result[key]
         print(f"{key}: switches {r['switches']} s  total {r['total']}  "
               + "  ".join(f"{k} {v:.4g}" if v is not None else f"{k} -" for k, v in r["credits"].items()))
@@ -81,6 +90,28 @@ def run_command(args) -> int:
         _filmstrips(out, comp, C.load(out / "composite.json"))
     print(f"wrote {out}/composite.json ({result['simulations']} simulations)")
     return 0
+
+
+def _refine_settings(args, script) -> dict | None:
+    """The --refine settings, or None; an option that cannot apply is an error."""
+    from . import composite as C
+    if args.refine is None:
+        extra = [f for f, v in (("--refine-rounds", args.refine_rounds),
+                                ("--refine-mutants", args.refine_mutants)) if v is not None]
+        if extra:
+            raise C.CompositeError(f"{', '.join(extra)} needs --refine PHASE,...")
+        return None
+    if args.no_search:
+        raise C.CompositeError("--refine refines after the search; it does not apply with --no-search")
+    phases = [p.strip() for p in args.refine.split(",") if p.strip()]
+    unknown = [p for p in phases if p not in script.phases]
+    if not phases or unknown:
+        raise C.CompositeError(f"--refine names {unknown or 'no phase'}; the script's phases: "
+                               f"{', '.join(script.phases)}")
+    for flag, v in (("--refine-rounds", args.refine_rounds), ("--refine-mutants", args.refine_mutants)):
+        if v is not None and not 1 <= v <= 10_000:
+            raise C.CompositeError(f"{flag} must be in 1..10000, got {v}")
+    return {"phases": phases, "rounds": args.refine_rounds or 16, "mutants": args.refine_mutants or 16}
 
 
 def _filmstrips(out: Path, careless, best) -> None:

@@ -61,8 +61,10 @@ class Part:
     actuation: str
     genome: object
 
-    def batch(self, n: int):
-        """The controller encoded for n identical episodes."""
+    def batch(self, n: int, genomes=None):
+        """The controller encoded for n identical episodes (or ``genomes``, one an episode)."""
+        if genomes is not None:
+            return self.family.encode(list(genomes))
         one = self.family.encode([self.genome])
         return one._replace(ci=np.repeat(one.ci, n, axis=0), cf=np.repeat(one.cf, n, axis=0))
 
@@ -246,15 +248,23 @@ _CHANNELS = ("q", "qd", "com", "contact_force", "pole_hit", "impact", "energy", 
 
 
 def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
-        threads: int | None = None) -> tuple[Trajectory, np.ndarray]:
+        threads: int | None = None, variants: tuple | None = None) -> tuple[Trajectory, np.ndarray]:
     """Run the composite for every row of ``switches`` [E, P − 1] (s; default its own).
 
+    ``variants`` = (k, genomes): episode e runs ``genomes[e]`` in phase k instead
+    of the phase's own controller (``switches`` then defaults to E rows of the
+    composite's own; a phase refinement scores its candidates so).
     Returns the whole-motion Trajectory [E, n_frames] and the switch frames
     ``bounds`` [E, P + 1].  An episode that diverges keeps its last good frame
     for the rest of the motion (as a single rollout does) and runs no later phase.
     """
+    if variants is not None and switches is None:
+        switches = np.tile(comp.switches, (len(variants[1]), 1))
     bounds = comp.bounds(switches)
     E, F, fig = bounds.shape[0], comp.n_frames, comp.figure
+    vk, vgenomes = variants if variants is not None else (len(comp.parts), None)
+    if vgenomes is not None and len(vgenomes) != E:
+        raise CompositeError(f"{len(vgenomes)} phase-{vk} variants for {E} episodes")
     iq, iqd = comp.parts[0].task.initial_state()
     q = _rows(iq if q0 is None else q0, E, 1)
     qd = _rows(iqd if qd0 is None else qd0, E, 1)
@@ -269,11 +279,14 @@ def run(comp: Composite, switches=None, q0=None, qd0=None, contact0=None,
             continue
         # episodes with the same start and the same switches so far have the same past and
         # this same phase: simulate one of them (a search's arrays often share a prefix)
-        keys = np.concatenate([start[active, None], bounds[active, :k + 2]], axis=1)
+        # (from the varied phase on, an episode's variant is part of its past)
+        variant = active if k >= vk else np.zeros_like(active)
+        keys = np.concatenate([start[active, None], bounds[active, :k + 2], variant[:, None]], axis=1)
         _, lead, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
         reps = active[lead]
         rep_of = reps[inverse.reshape(-1)]                  # each active episode's representative
-        tr = rollout(fig, comp.scenes[k], part.batch(len(reps)), n_steps=dur[reps] * comp.record_every,
+        batch = part.batch(len(reps), [vgenomes[i] for i in reps] if k == vk else None)
+        tr = rollout(fig, comp.scenes[k], batch, n_steps=dur[reps] * comp.record_every,
                      q0=q[reps], qd0=qd[reps], contact0=None if contact is None else contact[reps],
                      dt=comp.dt, record_every=comp.record_every, actuation=part.actuation,
                      default_tau=part.family.default_tau, threads=threads)

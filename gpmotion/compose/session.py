@@ -5,11 +5,15 @@
     OUT/checkpoint.json   gpmotion-compose-checkpoint: the search state after the last round
     OUT/careless.json     the composite as given (gpmotion-composite)
     OUT/composite.json    the composite with the best switch times found (gpmotion-composite)
+    OUT/refined_P.json    with ``refine``: phase P's refined controller (gpmotion-best), which
+                          composite.json names
     OUT/result.json       gpmotion-compose-result: careless and best scores, per-phase credits
 
 ``resume=True`` continues from the checkpoint to exactly the result of an
 uninterrupted search (the config must be the same: config.json names the
 controllers by absolute path; the composites in OUT name them relative to OUT).
+A search killed while refining phases resumes the refinement from its start:
+it is deterministic, so the result is the same.
 """
 from __future__ import annotations
 
@@ -27,19 +31,27 @@ from . import script as S
 LOG_FIELDS = ("round", "step", "evaluations", "best_score", "median_score", "best")
 
 
-def _config(comp: C.Composite, script_text: str, Q: int, G: int, H: int, seed: int, perturb) -> dict:
+def _config(comp: C.Composite, script_text: str, Q: int, G: int, H: int, seed: int, perturb,
+            refine: dict | None) -> dict:
     return {"script": script_text, "composite": C.to_obj(comp), "Q": Q, "G": G, "H": H, "seed": seed,
-            "perturb": perturb}
+            "perturb": perturb, **({"refine": refine} if refine else {})}   # absent: as before
 
 
 def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int = 16, H: int = 4,
                 seed: int = 0, perturb: float | None = None, resume: bool = False,
-                log=print, stop_after_rounds: int | None = None) -> dict | None:
-    """Run (or resume) the search into ``out``; return the result dict (None if stopped early)."""
+                log=print, stop_after_rounds: int | None = None, refine: dict | None = None
+                ) -> dict | None:
+    """Run (or resume) the search into ``out``; return the result dict (None if stopped early).
+
+    ``refine``: {"phases": [names], "rounds": R, "mutants": M} refines those
+    phases' controllers after the search (gpmotion.compose.refine)."""
     out = Path(out)
     script = S.parse(script_text)
     optimize.check_match(comp, script)
-    config = envelope("compose-config", _config(comp, script_text, Q, G, H, seed, perturb))
+    if refine:
+        refine = {"phases": list(refine["phases"]), "rounds": int(refine.get("rounds", 16)),
+                  "mutants": int(refine.get("mutants", 16))}
+    config = envelope("compose-config", _config(comp, script_text, Q, G, H, seed, perturb, refine))
     state = None
     if resume:
         old = read_json(out / "config.json", kind="compose-config")
@@ -75,11 +87,24 @@ def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int
     except _Stop:
         return None
     best = optimize.repaired(comp, ts)
+    result = {"careless": _scores(comp, script)}
+    if refine:
+        result["searched"] = _scores(best, script)
+        best, result["refined"] = _refine(out, best, script, refine, seed, log)
     C.save(out / "composite.json", best)
-    result = {"careless": _scores(comp, script), "best": _scores(best, script),
-              "simulations": ts.evaluations}
+    result.update(best=_scores(best, script), simulations=ts.evaluations
+                  + sum(r["evaluations"] for r in result.get("refined", {}).values()))
     atomic_write_json(out / "result.json", envelope("compose-result", result))
     return result
+
+
+def _refine(out: Path, comp: C.Composite, script, refine: dict, seed: int, log):
+    """Refine the phases; write each refined controller as OUT/refined_NAME.json
+    and name it in the composite."""
+    from . import refine as R
+    comp, report = R.refine(comp, script, refine["phases"], rounds=refine["rounds"],
+                            mutants=refine["mutants"], seed=seed, log=log)
+    return R.save_refined(out, comp, report), report
 
 
 def _trim_log(path: Path, last_round: int) -> None:

@@ -17,7 +17,7 @@ from .. import cli_options
 from ..cli_options import Option, number
 from ..gp import bytecode
 from ..gp import targets as gp_targets
-from ..gp.operators import random_tree
+from ..gp.operators import creep_constants, make_tree_operators, mutate_one_dof, random_tree
 from ..gp.primitives import CLAMP
 from ..gp.pset import build_pset
 from ..gp.subgoals import subgoal_table, task_subgoals
@@ -151,6 +151,24 @@ def target_law(task, actuators, spec: str) -> bytecode.TargetLaw | None:
     return bytecode.TargetLaw(modes, *(tuple(col) for col in zip(*rows)))
 
 
+def _bias(tokens: list, d: int, info) -> bool:
+    """Tree d's output + a small constant, in place (see GPFamily.mutate);
+    False when the tree would pass the size or depth limit."""
+    t = tokens[d]
+    if t[0] == "add" and isinstance(t[-1], float) and len(t) > 2:
+        t[-1] = float(t[-1] + random.gauss(0.0, 0.05))        # already biased: creep the bias
+        return True
+    new = ["add", *t, random.gauss(0.0, 0.05)]
+    try:
+        tree = bytecode.tokens_to_tree(new, info)
+    except ValueError:
+        return False
+    if len(tree) > 200 or tree.height > bytecode.MAX_TREE_DEPTH:
+        return False
+    tokens[d] = new
+    return True
+
+
 def _check_erc_range(r):
     """Random constants are drawn uniformly from [lo, hi]: two finite numbers, lo < hi."""
     ok = (isinstance(r, (list, tuple)) and len(r) == 2
@@ -214,6 +232,33 @@ class GPFamily(Family):
         try:
             return [bytecode.tree_to_tokens(random_tree(self.pset, (2, 6), bytecode.MAX_TREE_DEPTH,
                                                         200)) for _ in self.actuators]
+        finally:
+            random.setstate(outer)
+
+    def mutate(self, genome, rng, extra=None):
+        """One small variation of a whole controller, for searches that climb
+        from a given one (a composite's phase refinement; GP's own search
+        breeds instead).  Half the time constant creep (σ = 0.1) on one tree;
+        a third of the time a bias on one tree's output (its root becomes
+        ``add(tree, c)``, c ~ N(0, 0.05); a tree already so biased creeps its
+        c), which moves any tree smoothly, constants or not; else a new
+        subtree in one tree.  Within the search's depth and size limits.  DEAP
+        draws from Python's ``random``: seeded here from ``rng``, the caller's
+        state put back."""
+        outer = random.getstate()
+        random.seed(int(rng.integers(2**63)))
+        try:
+            tokens = [list(t) for t in genome]
+            u = random.random()
+            if u < 1 / 2:
+                ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
+                if creep_constants(ind, 0.1)[1] is not None:
+                    return [bytecode.tree_to_tokens(t) for t in ind]
+            if u < 5 / 6 and _bias(tokens, random.randrange(len(tokens)), self.info):
+                return tokens
+            ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
+            mutate_one_dof(ind, make_tree_operators(self.pset)[1])
+            return [bytecode.tree_to_tokens(t) for t in ind]
         finally:
             random.setstate(outer)
 

@@ -233,6 +233,15 @@ class KeyframesFamily(Family):
     def random(self, rng) -> np.ndarray:
         return self.lo + rng.random(self.shape) * (self.hi - self.lo)
 
+    def mutate(self, genome, rng, extra=None) -> np.ndarray:
+        """One variation (for searches that climb from a given controller; CMA-ES
+        samples its own): a normal step of σ = 0.1 of its range on one keyframe
+        value in three, clipped to the range."""
+        x = self.normalize(genome)
+        pick = rng.random(x.size) < 1 / 3
+        pick[rng.integers(x.size)] = True                   # at least one value moves
+        return self.denormalize(np.where(pick, x + 0.1 * rng.standard_normal(x.size), x))
+
     def normalize(self, genome) -> np.ndarray:
         return ((np.asarray(genome) - self.lo) / (self.hi - self.lo)).ravel()
 
