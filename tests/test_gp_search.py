@@ -325,3 +325,26 @@ def test_fresh_scores_keep_the_last_generations_best_not_the_luckiest(family):
     assert again.fresh_scores and again.final.per_round and again.best_cost == fresh.best_cost
     with pytest.raises(ValueError, match="reuse_costs"):
         make(family, fresh_scores=True)
+
+
+def test_polish_tunes_the_best_instead_of_breeding(family):
+    # the toy wants tree 0 = 0.5 on fixed senses: an output bias closes any offset
+    plain = run(make(family, seed=3, generations=8), family)
+    s = make(family, seed=3, generations=8, polish=4)
+    run(s, family, until=4)
+    assert s.history == plain.history[:4]            # the same GP until the polish starts
+    best_before = s.hof_cost
+    run(s, family)
+    polish_rows = s.history[4:]
+    # each polish generation is the previous best plus variations of it: never worse
+    assert all(b["min"] <= a["min"] for a, b in zip(s.history[3:], polish_rows))
+    assert s.best_cost <= best_before and s.best_cost < plain.best_cost
+    assert s.config()["polish"] == 4 and "polish" not in plain.config()
+    resumed = make(family, seed=3, generations=8, polish=4)
+    run(resumed, family, until=6)
+    again = make(family, seed=9, generations=8, polish=4)
+    again.load_state_dict(json.loads(json.dumps(resumed.state_dict())))
+    run(again, family)
+    assert again.history == s.history and again.best == s.best
+    with pytest.raises(ValueError, match=r"polish must be an integer in \[0, generations\)"):
+        make(family, generations=8, polish=8)

@@ -118,6 +118,11 @@ _OWN = dict([
                "MODE,JOINT=MODE,... e.g. rate,elbow_r=angle; default: the task's choice "
                "(gpmotion show TASK)",
                "the GP target mode", dict(type=str, metavar="MODE[,JOINT=MODE...]"), _targets),
+    _gp_option("--polish", "search", "polish",
+               "GP: the last N generations tune the best controller instead of breeding "
+               "(each: the best and population - 1 small variations of it: constant creep, "
+               "an output bias, now and then a new subtree; default 0)",
+               "the GP final local search", dict(type=int), number(0, 10**6, True)),
     _gp_option("--subgoals", "family", "subgoals",
                "the task's subgoal flags are GP terminals too: 0 until the subgoal is first "
                "met, then 1 (lamp_hop: arrived; lamp_limbo: passed_pole, arrived)",
@@ -151,14 +156,14 @@ def target_law(task, actuators, spec: str) -> bytecode.TargetLaw | None:
     return bytecode.TargetLaw(modes, *(tuple(col) for col in zip(*rows)))
 
 
-def _bias(tokens: list, d: int, info) -> bool:
-    """Tree d's output + a small constant, in place (see GPFamily.mutate);
-    False when the tree would pass the size or depth limit."""
+def _bias(tokens: list, d: int, info, sigma: float) -> bool:
+    """Tree d's output + a small constant (N(0, sigma)), in place (see
+    GPFamily.mutate); False when the tree would pass the size or depth limit."""
     t = tokens[d]
     if t[0] == "add" and isinstance(t[-1], float) and len(t) > 2:
-        t[-1] = float(t[-1] + random.gauss(0.0, 0.05))        # already biased: creep the bias
+        t[-1] = float(t[-1] + random.gauss(0.0, sigma))       # already biased: creep the bias
         return True
-    new = ["add", *t, random.gauss(0.0, 0.05)]
+    new = ["add", *t, random.gauss(0.0, sigma)]
     try:
         tree = bytecode.tokens_to_tree(new, info)
     except ValueError:
@@ -238,11 +243,12 @@ class GPFamily(Family):
     def mutate(self, genome, rng, extra=None):
         """One small variation of a whole controller, for searches that climb
         from a given one (a composite's phase refinement; GP's own search
-        breeds instead).  Half the time constant creep (σ = 0.1) on one tree;
-        a third of the time a bias on one tree's output (its root becomes
-        ``add(tree, c)``, c ~ N(0, 0.05); a tree already so biased creeps its
-        c), which moves any tree smoothly, constants or not; else a new
-        subtree in one tree.  Within the search's depth and size limits.  DEAP
+        breeds instead).  Half the time constant creep on one tree; a third
+        of the time a bias on one tree's output (its root becomes ``add(tree,
+        c)``, c ~ N(0, σ); a tree already so biased creeps its c), which
+        moves any tree smoothly, constants or not; else a new subtree in one
+        tree.  σ is drawn log-uniformly in [0.005, 0.1] each time, so steps
+        both coarse and fine are tried.  Within the search's depth and size limits.  DEAP
         draws from Python's ``random``: seeded here from ``rng``, the caller's
         state put back."""
         outer = random.getstate()
@@ -250,11 +256,12 @@ class GPFamily(Family):
         try:
             tokens = [list(t) for t in genome]
             u = random.random()
+            sigma = 10 ** random.uniform(-2.3, -1.0)         # 0.005 .. 0.1: coarse and fine steps
             if u < 1 / 2:
                 ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
-                if creep_constants(ind, 0.1)[1] is not None:
+                if creep_constants(ind, sigma)[1] is not None:
                     return [bytecode.tree_to_tokens(t) for t in ind]
-            if u < 5 / 6 and _bias(tokens, random.randrange(len(tokens)), self.info):
+            if u < 5 / 6 and _bias(tokens, random.randrange(len(tokens)), self.info, sigma):
                 return tokens
             ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
             mutate_one_dof(ind, make_tree_operators(self.pset)[1])

@@ -15,7 +15,11 @@ one tree's constants), else reproduction (a copy); the best ``elitism``
 pass unchanged.  With ``islands`` = K > 1 the population is K demes that
 breed apart (elitism per deme) and every ``migrate_every`` generations pass
 their ``migrants`` best around a ring (an island model: the demes explore
-different solutions, so one stuck deme does not stall the run).
+different solutions, so one stuck deme does not stall the run).  With
+``polish`` = P > 0 the last P generations do not breed: each is the previous
+generation's best and population − 1 of its variations (``family.mutate``),
+a (1 + λ) local search that tunes the best controller's constants and output
+offsets (memetic GP).
 
 Decisions, stated once here:
 
@@ -95,7 +99,8 @@ class GPSearch(GenerationalSearch):
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True,
-                 stop_on_success: bool = False, fresh_scores: bool = False, task=None):
+                 stop_on_success: bool = False, fresh_scores: bool = False, polish: int = 0,
+                 task=None):
         super().__init__(family, task if task is not None else getattr(family, "task", None))
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
@@ -104,7 +109,8 @@ class GPSearch(GenerationalSearch):
                              selection=selection, tournament_size=tournament_size,
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
                              max_size=max_size, seed=seed, reuse_costs=reuse_costs,
-                             stop_on_success=stop_on_success, fresh_scores=fresh_scores))
+                             stop_on_success=stop_on_success, fresh_scores=fresh_scores,
+                             polish=polish))
         self.stopped = False                      # stop_on_success fired
         self._rstate = random.Random(self.seed).getstate()
         self.generation = 0
@@ -132,6 +138,7 @@ class GPSearch(GenerationalSearch):
         c.setdefault("p_creep", 0.0)            # checkpoints written before creep existed
         c.setdefault("stop_on_success", False)
         c.setdefault("fresh_scores", False)     # absent before robust runs kept a per-round best
+        c.setdefault("polish", 0)               # absent before the final local search existed
         c.setdefault("creep_sigma", 0.1)
         for k, v in (("islands", 1), ("migrate_every", 5), ("migrants", 2)):
             c.setdefault(k, v)
@@ -170,6 +177,8 @@ class GPSearch(GenerationalSearch):
         if c["fresh_scores"] and c["reuse_costs"]:
             bad("fresh_scores (costs comparable within a generation only) needs reuse_costs "
                 "false", c["fresh_scores"])
+        if not _is_int(c["polish"]) or not 0 <= c["polish"] < c["generations"]:
+            bad("polish must be an integer in [0, generations)", c["polish"])
         if not _is_int(c["seed"]):
             bad("seed must be an integer (randomness is explicit)", c["seed"])
         self.population_size, self.generations = int(c["population"]), int(c["generations"])
@@ -181,7 +190,7 @@ class GPSearch(GenerationalSearch):
         self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
         self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
-        self.stop_on_success = bool(c["stop_on_success"])
+        self.stop_on_success, self.polish = bool(c["stop_on_success"]), int(c["polish"])
         self._set_fresh_scores(c["fresh_scores"])
         self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
 
@@ -195,7 +204,8 @@ class GPSearch(GenerationalSearch):
                 "elitism": self.elitism, "init_depth": list(self.init_depth),
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
                 "reuse_costs": self.reuse_costs, "stop_on_success": self.stop_on_success,
-                **({"fresh_scores": True} if self.fresh_scores else {})}    # absent: as before
+                **({"fresh_scores": True} if self.fresh_scores else {}),   # absent: as before
+                **({"polish": self.polish} if self.polish else {})}
 
     # -- randomness ----------------------------------------------------------
     @contextlib.contextmanager
@@ -365,13 +375,30 @@ class GPSearch(GenerationalSearch):
         return pop, costs
 
     def _breed(self) -> list:
-        """Next population, island by island (one island: the whole population)."""
+        """Next population, island by island (one island: the whole population);
+        in the last ``polish`` generations a local search around the best."""
+        if self.generation + 1 >= self.generations - self.polish:
+            return self._polish()
         pop, costs = self._pop, self.costs
         if self.islands > 1 and (self.generation + 1) % self.migrate_every == 0:
             pop, costs = self._migrate(pop, costs)
         new = []
         for lo, hi in self._island_bounds():
             new += self._breed_deme(pop[lo:hi], costs[lo:hi])
+        return new
+
+    def _polish(self) -> list:
+        """A (1 + λ) step: this generation's best and population − 1 variations
+        of it (``family.mutate``: constant creep, an output bias, now and then
+        a new subtree), so the final generations tune the best controller
+        rather than breed (costs of one generation share its phase, so the
+        best is judged like the mutants)."""
+        best = self._keys[int(np.argmin(self.costs))]
+        rng = np.random.default_rng(random.getrandbits(63))
+        new = [list(self._pop[int(np.argmin(self.costs))])]
+        for _ in range(self.population_size - 1):
+            tokens = self.family.mutate([list(t) for t in best], rng)
+            new.append([tokens_to_tree(t, self.family.info) for t in tokens])
         return new
 
     def _breed_deme(self, pop: list, costs: np.ndarray) -> list:
