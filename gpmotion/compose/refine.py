@@ -21,6 +21,7 @@ import numpy as np
 
 from ..families.base import Family
 from . import composite as C
+from .transitions import checked_scores
 
 STATE_FORMAT = "phase-refinement-v1"
 
@@ -53,12 +54,7 @@ class PhaseRefinement:
         return list(self.pending)
 
     def tell(self, scores) -> None:
-        if self.pending is None:
-            raise RuntimeError("tell() without ask()")
-        scores = np.asarray(scores, dtype=np.float64).reshape(-1)
-        if scores.shape != (len(self.pending),):
-            raise ValueError(f"expected {len(self.pending)} scores, got {scores.shape[0]}")
-        scores = np.where(np.isfinite(scores), scores, -np.inf)
+        scores = checked_scores(self.pending, scores)
         j = int(np.argmax(scores))
         if self.round < 0:
             self.start_score = self.best_score = float(scores[0])

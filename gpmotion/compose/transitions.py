@@ -28,6 +28,17 @@ import numpy as np
 RANDOMIZE = 1.0 / 3.0          # Fig. 5: randomize 1/3 of the time, perturb 2/3
 
 
+def checked_scores(pending, scores) -> np.ndarray:
+    """Scores told for the ``pending`` asks (higher is better): one each, a
+    non-finite score the worst."""
+    if pending is None:
+        raise RuntimeError("tell() without ask()")
+    scores = np.asarray(scores, dtype=np.float64).reshape(-1)
+    if scores.shape != (len(pending),):
+        raise ValueError(f"expected {len(pending)} scores, got {scores.shape[0]}")
+    return np.where(np.isfinite(scores), scores, -np.inf)
+
+
 class TransitionSearch:
     def __init__(self, n_switches: int, seconds: float, guess=None, *, Q: int = 16, G: int = 16,
                  H: int = 4, seed: int = 0, perturb: float | None = None, tick: float | None = None):
@@ -72,12 +83,7 @@ class TransitionSearch:
 
     def tell(self, scores) -> None:
         """Scores (higher is better) of the arrays from the last ask()."""
-        if self.pending is None:
-            raise RuntimeError("tell() without ask()")
-        scores = np.asarray(scores, dtype=np.float64).reshape(-1)
-        if scores.shape != (len(self.pending),):
-            raise ValueError(f"expected {len(self.pending)} scores, got {scores.shape[0]}")
-        scores = np.where(np.isfinite(scores), scores, -np.inf)
+        scores = checked_scores(self.pending, scores)
         self.evaluations += len(scores)
         i = int(np.argmax(scores))
         if scores[i] > self.best_score:
