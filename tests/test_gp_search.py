@@ -348,3 +348,13 @@ def test_polish_tunes_the_best_instead_of_breeding(family):
     assert again.history == s.history and again.best == s.best
     with pytest.raises(ValueError, match=r"polish must be an integer in \[0, generations\)"):
         make(family, generations=8, polish=8)
+
+
+def test_a_tasks_polish_keeps_its_share_of_the_generations():
+    fam = make_family("gp", get_task("herman_touch_object"))       # its default: 10 of 50
+    assert fam.make_search(0).config()["polish"] == 10
+    assert fam.make_search(0, generations=5).config()["polish"] == 1
+    assert "polish" not in fam.make_search(0, generations=1).config()    # no room: none
+    assert fam.make_search(0, generations=20, polish=3).config()["polish"] == 3   # the user's wins
+    with pytest.raises(ValueError, match="polish must be"):
+        fam.make_search(0, generations=5, polish=5)

@@ -311,6 +311,11 @@ class GPFamily(Family):
         """GPSearch; ring migration fitted to small islands (the user cannot set
         ``migrants``; its default 2 needs islands of 4)."""
         opts = {k: v for k, v in settings.items() if v is not None}
+        defaults = self.search_defaults(self.task)
+        if "polish" not in opts and defaults.get("polish") and isinstance(opts.get("generations"), int):
+            # a task's polish is a share of its generations: --generations N keeps the share
+            share = defaults["polish"] / defaults["generations"]
+            opts["polish"] = min(round(share * opts["generations"]), max(0, opts["generations"] - 1))
         if "migrants" not in opts:
             pop = opts.get("population", self.search_defaults(self.task)["population"])
             islands = opts.get("islands", 1)
