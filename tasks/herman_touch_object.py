@@ -40,8 +40,8 @@ class HermanTouchObject(HermanTask):
     # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5); docs/notes/herman.md.
     gp_targets = "rate"
     # The last 10 of the 50 generations tune the best controller (--polish; memetic GP):
-    # session 12, 5 seeds each, target 0 4/5 (3/5 without), target 1 2/5 (1/5),
-    # target 2 see docs/notes/herman.md.
+    # session 12, 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
+    # 20 of 50: 3, 3, 4); docs/notes/herman.md.
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
