@@ -280,9 +280,11 @@ def test_every_herman_task_requires_rest_and_shares_one_attribute_block(name):
     assert issubclass(cls, HermanTask)
     for attr in ("controlled", "terminals", "view", "success"):
         assert attr not in vars(cls), f"{name} repeats {attr}: it belongs to HermanTask"
-    # a task may change its budget's generations (longer episodes), nothing else of it
-    assert {k: v for k, v in cls.gp_defaults.items() if k != "generations"} == \
-        {k: v for k, v in HermanTask.gp_defaults.items() if k != "generations"}
+    # a task may change its budget's generations (longer episodes) and how many of them
+    # polish the best (--polish), nothing else of it
+    own = ("generations", "polish")
+    assert {k: v for k, v in cls.gp_defaults.items() if k not in own} == \
+        {k: v for k, v in HermanTask.gp_defaults.items() if k not in own}
     assert f"{REST_SPEED * 100:.0f} cm/s" in cls.success_threshold and f"{SETTLE} s" in cls.success_threshold
 
 
