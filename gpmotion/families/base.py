@@ -9,8 +9,9 @@ class declares:
 * genomes as plain data: ``random(rng)``, ``encode(genomes)`` (to the rollout
   kernel's :class:`~gpmotion.controllers.ControllerBatch`), ``to_json`` /
   ``from_json`` (safe JSON, validated on the way in), ``copy``;
-* variation: ``mutate(genome, rng, extra)`` where its search uses it (a
-  family whose search varies genomes itself, as GP's does, need not);
+* variation: ``mutate(genome, rng, extra)`` where its search uses it, and for
+  what climbs from a given controller (a composite's phase refinement, GP's
+  ``polish``); a family without it cannot be refined (a clear error);
 * its search: ``search_class`` (a :class:`gpmotion.search.base.Search`),
   ``search_defaults(task)``, ``make_search(seed, **settings)`` and
   ``budget_settings(budget, population)`` (what ``compare`` runs under an
