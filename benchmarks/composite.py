@@ -150,7 +150,7 @@ def main(argv=None):
     C.save(out / "careless.json", comp)
     C.save(out / "repaired.json", fixed)
     if a.refine:
-        from gpmotion.compose.refine import refine
+        from gpmotion.compose.refine import refine, save_refined
         t0, c0 = time.perf_counter(), time.process_time()
         fixed, climbs = refine(fixed, s, [p for p in a.refine.split(",") if p], rounds=a.refine_rounds,
                                mutants=a.refine_mutants, seed=a.seed)
@@ -161,7 +161,6 @@ def main(argv=None):
                           for k, c in climbs.items()))
         refined, traj1 = report("refined", fixed, s, fixed.switches)
         refined.update(climbs=climbs, refine_seconds=rwall, refine_cpu_seconds=rcpu)
-        from gpmotion.compose.refine import save_refined
         fixed = save_refined(out, fixed, climbs)
         C.save(out / "refined.json", fixed)
     try:

@@ -193,11 +193,11 @@ class Task:
             raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D with a "
                              f"{fig.root} root; the task is written for {base.name}, "
                              f"{base.dimensions}-D with a {base.root} root")
+        derived = {s.name for s in self.task_senses()}     # the task's own senses: not the figure's
         needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
                  ("site", base.site_names, fig.site_names),
                  ("contact", base.contact_names, fig.contact_names),
-                 ("sense", [n for n in self.terminals or ()
-                            if n not in {s.name for s in self.task_senses()}], fig.sense_names))
+                 ("sense", [n for n in self.terminals or () if n not in derived], fig.sense_names))
         missing = [f"{kind} {n!r}" for kind, names, have in needs for n in names if n not in have]
         if missing:
             raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "

@@ -358,3 +358,13 @@ def test_a_tasks_polish_keeps_its_share_of_the_generations():
     assert fam.make_search(0, generations=20, polish=3).config()["polish"] == 3   # the user's wins
     with pytest.raises(ValueError, match="polish must be"):
         fam.make_search(0, generations=5, polish=5)
+
+
+def test_polish_keeps_the_searchs_size_and_depth_limits(family):
+    # tight limits: an output bias or a new subtree would pass them (9 nodes, depth 2 without)
+    s = run(make(family, seed=4, generations=10, polish=8, max_size=3, max_depth=1,
+                 init_depth=(0, 1)), family)
+    assert s.generation == 10
+    for ind in s._pop:                                # the last polish generation's trees
+        for tree in ind:
+            assert len(tree) <= 3 and tree.height <= 1

@@ -17,6 +17,8 @@ JSON.  A family without ``mutate`` cannot be refined (a clear error).
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..families.base import Family
@@ -137,10 +139,8 @@ def controller_record(part: C.Part, genome, refined: dict) -> dict:
 
 def _with_genome(comp: C.Composite, k: int, genome) -> C.Composite:
     parts = list(comp.parts)
-    old = parts[k]
-    parts[k] = C.Part(old.name, old.source, old.task, old.family, old.actuation, genome)
-    return C.Composite(parts, comp.switches.copy(), comp.seconds, comp.scene, comp.scene_settings,
-                       comp.scenes, comp.phase_scene_settings)
+    parts[k] = replace(parts[k], genome=genome)
+    return replace(comp, parts=parts, switches=comp.switches.copy())
 
 
 def save_refined(folder, comp: C.Composite, report: dict) -> C.Composite:
@@ -155,7 +155,5 @@ def save_refined(folder, comp: C.Composite, report: dict) -> C.Composite:
         if part.name in report:
             path = Path(folder) / f"refined_{part.name}.json"
             atomic_write_json(path, envelope("best", controller_record(part, part.genome, report[part.name])))
-            parts[k] = C.Part(part.name, str(path.resolve()), part.task, part.family, part.actuation,
-                              part.genome)
-    return C.Composite(parts, comp.switches.copy(), comp.seconds, comp.scene, comp.scene_settings,
-                       comp.scenes, comp.phase_scene_settings)
+            parts[k] = replace(part, source=str(path.resolve()))
+    return replace(comp, parts=parts, switches=comp.switches.copy())

@@ -156,7 +156,7 @@ def target_law(task, actuators, spec: str) -> bytecode.TargetLaw | None:
     return bytecode.TargetLaw(modes, *(tuple(col) for col in zip(*rows)))
 
 
-def _bias(tokens: list, d: int, info, sigma: float) -> bool:
+def _bias(tokens: list, d: int, info, sigma: float, max_depth: int, max_size: int) -> bool:
     """Tree d's output + a small constant (N(0, sigma)), in place (see
     GPFamily.mutate); False when the tree would pass the size or depth limit."""
     t = tokens[d]
@@ -168,7 +168,7 @@ def _bias(tokens: list, d: int, info, sigma: float) -> bool:
         tree = bytecode.tokens_to_tree(new, info)
     except ValueError:
         return False
-    if len(tree) > 200 or tree.height > bytecode.MAX_TREE_DEPTH:
+    if len(tree) > max_size or tree.height > max_depth:
         return False
     tokens[d] = new
     return True
@@ -240,7 +240,8 @@ class GPFamily(Family):
         finally:
             random.setstate(outer)
 
-    def mutate(self, genome, rng, extra=None):
+    def mutate(self, genome, rng, extra=None, *, max_depth: int = bytecode.MAX_TREE_DEPTH,
+               max_size: int = 200):
         """One small variation of a whole controller, for searches that climb
         from a given one (a composite's phase refinement; GP's own search
         breeds instead).  Half the time constant creep on one tree; a third
@@ -248,9 +249,10 @@ class GPFamily(Family):
         c)``, c ~ N(0, σ); a tree already so biased creeps its c), which
         moves any tree smoothly, constants or not; else a new subtree in one
         tree.  σ is drawn log-uniformly in [0.005, 0.1] each time, so steps
-        both coarse and fine are tried.  Within the search's depth and size limits.  DEAP
-        draws from Python's ``random``: seeded here from ``rng``, the caller's
-        state put back."""
+        both coarse and fine are tried.  Within ``max_depth`` and ``max_size``
+        (GPSearch's defaults; its polish passes its own).  DEAP draws from
+        Python's ``random``: seeded here from ``rng``, the caller's state put
+        back."""
         outer = random.getstate()
         random.seed(int(rng.integers(2**63)))
         try:
@@ -261,10 +263,11 @@ class GPFamily(Family):
                 ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
                 if creep_constants(ind, sigma)[1] is not None:
                     return [bytecode.tree_to_tokens(t) for t in ind]
-            if u < 5 / 6 and _bias(tokens, random.randrange(len(tokens)), self.info, sigma):
+            if u < 5 / 6 and _bias(tokens, random.randrange(len(tokens)), self.info, sigma,
+                                   max_depth, max_size):
                 return tokens
             ind = [bytecode.tokens_to_tree(t, self.info) for t in tokens]
-            mutate_one_dof(ind, make_tree_operators(self.pset)[1])
+            mutate_one_dof(ind, make_tree_operators(self.pset, max_depth, max_size)[1])
             return [bytecode.tree_to_tokens(t) for t in ind]
         finally:
             random.setstate(outer)

@@ -393,11 +393,12 @@ class GPSearch(GenerationalSearch):
         a new subtree), so the final generations tune the best controller
         rather than breed (costs of one generation share its phase, so the
         best is judged like the mutants)."""
-        best = self._keys[int(np.argmin(self.costs))]
+        i = int(np.argmin(self.costs))
         rng = np.random.default_rng(random.getrandbits(63))
-        new = [list(self._pop[int(np.argmin(self.costs))])]
+        new = [list(self._pop[i])]
         for _ in range(self.population_size - 1):
-            tokens = self.family.mutate([list(t) for t in best], rng)
+            tokens = self.family.mutate([list(t) for t in self._keys[i]], rng,
+                                        max_depth=self.max_depth, max_size=self.max_size)
             new.append([tokens_to_tree(t, self.family.info) for t in tokens])
         return new
 
