@@ -236,15 +236,46 @@ def test_reach_standing_scores_balance_and_falls():
     task = get_task("herman_reach_standing", seconds=1.0)
     assert task.figure.model.jtype[0] == 2                                # a free pelvis
     hold = schedule.constant(task.figure.model.neutral)
-    still = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps)
+    still = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps, dt=task.dt,
+                             record_every=task.record_every)
     _, m, _ = task.score(still)
     assert m["balance"][0] < 0.01                                      # stands where it stood
     q0 = task.figure.q_default.copy()
     q0[3:7] = [np.cos(0.3), 0.0, np.sin(0.3), 0.0]                     # leaning 0.6 rad forward
     q0[2] += 0.2
-    fall = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps, q0=q0)
+    fall = gpmotion.rollout(task.figure, task.scene(), hold, n_steps=task.n_steps, q0=q0,
+                            dt=task.dt, record_every=task.record_every)
     _, m, ok = task.score(fall)
     assert m["balance"][0] > 1.0 and not ok[0]                         # it fell: +1
+
+
+def test_standing_herman_at_the_reach_tasks_step_tracks_a_fine_step():
+    """herman_reach_standing-v2 steps at 2 ms on the standing figure's stiff
+    ground.  Over fast random arm motions (keyframes anywhere in the arm's
+    range every 0.3 s) the 2 ms run stays stable and, while the pelvis stays
+    within the 5 cm a success allows, its fingertip stays within 1 cm of a
+    0.5 ms run (measured 3-6 mm, 11-24 mm at 5 ms; the touch threshold is
+    4 cm) and its pelvis within 3 mm (measured 0.6-1.9 mm)."""
+    from gpmotion.tasks.herman_reach_standing import STEADY
+    task = get_task("herman_reach_standing")
+    assert (task.dt, task.record_every) == (2e-3, 5)
+    fig = task.figure
+    arm = [fig.actuator_names.index(a) for a in ARM]
+    lim, rng = fig.actuator_limits(), np.random.default_rng(1)
+    times, judged = np.linspace(0.0, 1.5, 6), 0
+    for _ in range(4):
+        keys = np.tile(fig.model.neutral, (len(times), 1))
+        keys[1:, arm] = rng.uniform(lim[arm, 0], lim[arm, 1], (len(times) - 1, len(arm)))
+        fine, coarse = (gpmotion.simulate(fig, 2.0, targets=(times, keys), dt=dt,
+                                          record_every=round(0.01 / dt)) for dt in (5e-4, 2e-3))
+        assert not coarse.diverged.any() and np.isfinite(coarse.q).all()
+        pelvis = fine.base()[0, :, :3]
+        if np.linalg.norm(pelvis[:, :2] - pelvis[0, :2], axis=-1).max() > STEADY:
+            continue                                   # a stumble: not what a success looks like
+        judged += 1
+        assert np.abs(coarse.site("fingertip_r") - fine.site("fingertip_r")).max() < 0.01
+        assert np.abs(coarse.base()[..., :3] - fine.base()[..., :3]).max() < 0.003
+    assert judged >= 2
 
 
 # ---------------------------------------------------------------- success at rest
