@@ -71,8 +71,10 @@ def _cpu() -> float:
 
 
 def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = None,
-            search: dict | None = None, family: dict | None = None) -> dict:
-    task, params = {**CONFIGS, **EXTRA}[name]
+            search: dict | None = None, family: dict | None = None,
+            params: dict | None = None) -> dict:
+    task, preset = {**CONFIGS, **EXTRA}[name]
+    extra, params = dict(params or {}), {**preset, **(params or {})}
     family = {**(family or {}), **({"targets": targets} if targets else {})}
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(dir=tmp) as d:
@@ -86,6 +88,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
         best = read_json(out / "best.json", kind="best")
     return {"config": name, "seed": seed, "targets": family.get("targets", "task default"),
             **({"search": search} if search else {}),
+            **({"params": extra} if extra else {}),
             **({"family": family} if family else {}),
             "success": bool(best["success"]),
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
@@ -145,8 +148,11 @@ def main(argv=None):
                          "(repeatable; numbers are read as numbers)")
     ap.add_argument("--family", action="append", default=[], metavar="KEY=VALUE",
                     help="a GP family option for every run, e.g. erc_range=[-3,3] (repeatable)")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                    help="a task parameter for every run, e.g. w_limits=2 (repeatable; on top of "
+                         "each config's own)")
     args = ap.parse_args(argv)
-    search, family = _settings(args.search), _settings(args.family)
+    search, family, params = _settings(args.search), _settings(args.family), _settings(args.param)
     names = [n for n in args.only.split(",") if n] or list(CONFIGS)
     bad = [n for n in names if n not in {**CONFIGS, **EXTRA}]
     if bad:
@@ -159,7 +165,7 @@ def main(argv=None):
         for n in names:
             if (n, seed) in have:
                 continue
-            r = run_one(n, seed, targets=args.targets, search=search, family=family)
+            r = run_one(n, seed, targets=args.targets, search=search, family=family, params=params)
             with path.open("a") as f:
                 f.write(json.dumps(r) + "\n")
             print(f"{n} seed {seed}: {'solved' if r['success'] else 'NOT solved'} in "

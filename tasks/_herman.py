@@ -169,6 +169,23 @@ def posture(traj, controlled=ARM):
     return np.sqrt((dev ** 2).mean(axis=-1)).mean(axis=1)
 
 
+LIMIT_EPS = 0.02           # rad: a joint this close to an end of its range is on its limit
+
+
+def on_limits(traj, controlled=ARM, seconds=0.5):
+    """Per episode: the fraction of the joints under GP that sit on a limit of
+    their range (within LIMIT_EPS), averaged over the last ``seconds``.  Under
+    rate targets any constant tree drives its joint to a limit, so a pose of
+    joints on their limits is the easy near-solution of a reach."""
+    fig = traj.figure
+    m = fig.model
+    idx = [fig.actuator_names.index(a) for a in controlled]
+    lim = fig.actuator_limits()[idx]
+    q = traj.q[:, tail(traj, seconds)][..., m.act_q[idx]]
+    on = (q <= lim[:, 0] + LIMIT_EPS) | (q >= lim[:, 1] - LIMIT_EPS)
+    return on.mean(axis=(1, 2))
+
+
 def site_speed(traj, name):
     """Speed [E, F] of a site by central differences over the recorded frames (m/s)."""
     p = traj.site(name)

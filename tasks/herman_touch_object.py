@@ -14,7 +14,7 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, on_limits,
                                     style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -32,7 +32,7 @@ class HermanTouchObject(HermanTask):
     name = "herman_touch_object"
     description = "Herman touches an object with the right fingertip"
     params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
-              "seconds": 1.5}
+              "seconds": 1.5, "w_limits": 0.0}
     bounds = {"target": (-1, 2)}
     # The trees drive their joints' target *rates* (gpmotion.gp.bytecode.TargetLaw):
     # a tree of the fingertip's error then settles on the object, where an angle
@@ -46,10 +46,13 @@ class HermanTouchObject(HermanTask):
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
                   "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
-                  "z": "object above the pelvis (m)", "seconds": "episode length (s)"}
+                  "z": "object above the pelvis (m)", "seconds": "episode length (s)",
+                  "w_limits": "weight of the limits term (per unit: 1 = a 10 cm miss)"}
     goal_label = "object"          # pictures: the scene goal, captioned
     terms = (Term("object", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
+             Term("limits", 0.1 * MAIN_WEIGHT, param="w_limits",
+                  doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
@@ -80,6 +83,7 @@ class HermanTouchObject(HermanTask):
     def measure(self, traj):
         d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
         out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
+        out["limits"] = on_limits(traj, self.controlled, HOLD)
         out.update(style_measures(traj))
         return out
 

@@ -278,6 +278,26 @@ def test_standing_herman_at_the_reach_tasks_step_tracks_a_fine_step():
     assert judged >= 2
 
 
+def test_the_limits_term_counts_the_arm_joints_resting_on_a_limit(herman):
+    """limits = the fraction of the arm's joints within 0.02 rad of an end of
+    their range over the last 0.5 s: 0 at neutral, k/6 with k joints on a limit,
+    and only the tail counts."""
+    from gpmotion.tasks._herman import on_limits
+    lim = herman.actuator_limits()
+    q = herman.q_default.copy()
+    assert on_limits(_still(herman, q))[0] == 0.0
+    for k, a in enumerate(("shoulder_r_z", "wrist_r_y")):
+        j = herman.actuator_names.index(a)
+        q[herman.model.act_q[j]] = lim[j, k % 2] - 0.01 * (1 if k % 2 else -1)   # 0.01 rad inside
+    assert on_limits(_still(herman, q))[0] == pytest.approx(2 / 6)
+    tr = _still(herman, q)
+    early = tr.times < tr.times[-1] - 0.5 - 1e-9
+    tr.q[:, ~early] = herman.q_default                 # on the limits only before the tail
+    assert on_limits(tr)[0] == 0.0
+    task = get_task("herman_touch_object", target=1, w_limits=2.0)
+    assert {t.name: t.weight for t in task.terms}["limits"] == pytest.approx(2.0)
+
+
 # ---------------------------------------------------------------- success at rest
 def _passing(fig, q_end, dq, seconds=1.0):
     """A Trajectory moving at constant joint velocity dq that is at q_end on its last frame."""
