@@ -82,6 +82,9 @@ def select(ci, cf, cstate, previous):
     return best
 
 
+READS = 1          # RAW_SENSES (gpmotion.controllers): filtered from raw units
+
+
 @njit(cache=True)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules, V, n_act, every = ci[0], ci[1], ci[2], ci[3]

@@ -78,6 +78,9 @@ def select_rule(ci, cf, senses_norm, previous):
     return best
 
 
+READS = 2          # NORMALIZED_SENSES (gpmotion.controllers): stimuli are boxes in [0, 1]
+
+
 @njit(cache=True)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_senses = ci[1]

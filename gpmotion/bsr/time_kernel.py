@@ -65,6 +65,9 @@ def variable_segment(t, t_per, cf, first, n_rules):
     return r
 
 
+READS = 0          # NO_SENSES (gpmotion.controllers): rules switch on time only
+
+
 @njit(cache=True)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules = ci[0]

@@ -20,6 +20,13 @@ functions, imported by the generated rollout kernel (gpmotion.sim.rollout):
 * ``taus``   float64[n_act] out: time constants for ``kinematic`` actuation
   (pre-filled with the rollout's default τ; a family may overwrite them)
 
+A kernel module may also say which senses ``control`` reads, as a module
+constant ``READS``: ``NO_SENSES`` (0: time only), ``RAW_SENSES`` (1:
+``senses``) or ``NORMALIZED_SENSES`` (2: ``senses_norm`` too; the default
+when a module does not say).  The rollout then computes no more than that
+each step (a run that records senses computes the raw ones anyway): an
+open-loop controller's step skips the senses, a GP's their normalization.
+
 Batches are rectangular: ``ci[n_episodes, Li]``, ``cf[n_episodes, Lf]``
 (zero-padded), plus ``cstate_size``.  Python-side, a family's ``encode``
 turns plain-data genomes into a :class:`ControllerBatch`.
@@ -29,6 +36,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+
+
+# what a kernel module's control() reads (its optional READS constant)
+NO_SENSES, RAW_SENSES, NORMALIZED_SENSES = 0, 1, 2
 
 
 class ControllerBatch(NamedTuple):

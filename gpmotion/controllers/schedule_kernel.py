@@ -11,6 +11,8 @@ Used by ``gpmotion.simulate``, the benchmark and tests.  ``ci = [mode, n_keys]``
 import numpy as np
 from numba import njit
 
+READS = 0          # NO_SENSES (gpmotion.controllers): targets depend on time only
+
 
 @njit(cache=True)
 def init(ci, cf, cstate):

@@ -49,6 +49,7 @@ from numba import njit
 {imports}
 
 CLAMP = {clamp!r}
+READS = 1          # RAW_SENSES (gpmotion.controllers): terminals read raw senses
 
 
 @njit(cache=True, inline="always")
