@@ -28,6 +28,8 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   beryl-tumble    Beryl, time-based, t_per = T, + rotations (w 4)        [tumble, Fig. 11]
   beryl-periodic  Beryl, time-based, t_per = T/6, + contact_distance     [periodic shuffle, Fig. 12]
   star-contact-w4, beryl-periodic-w4  the two contact_distance ones at weight 4
+  star-grounded, beryl-periodic-grounded  the two with grounded_distance (w 2) for
+                  contact_distance: the paper's term read for pinned contacts
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
 Runs are queued seed-major (every configuration's seed 0 first), so a study
@@ -78,6 +80,13 @@ CONFIGS = {
     # contact_distance weighted 4: at 2 and 40,000 evaluations a 6.5 m hop
     # (cost -12.1) beat a 2.4 m periodic shuffle (-11.3) on Beryl, and
     # Star-Man's best were shuffles with one 40-80 ms flight
+    # Table 3's contact_distance read for the paper's pinned contacts (com travel
+    # while some point touches: gpmotion.bsr.secondary.grounded_distance)
+    "star-grounded": ("starman_travel", "bsr-time", {"w_grounded_distance": 2.0}, {},
+                      ("shuffle", "periodic shuffle"), "Star-Man time-based + grounded_distance (w 2)"),
+    "beryl-periodic-grounded": ("beryl_travel", "bsr-time", {"w_grounded_distance": 2.0},
+                                {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                                "Beryl time-based, t_per = 0.5 s, + grounded_distance (w 2), τ ≥ 0.2 s"),
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
     "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},

@@ -11,7 +11,10 @@ TRAVEL_TERMS = (Term("distance", -1.0, main=True, doc="com x displacement (m), r
                 Term("max_height", -1.0, param="w_max_height", doc="highest com z (m)"),
                 Term("contact_distance", -1.0, param="w_contact_distance",
                      doc="m travelled right by points in continuous contact (shuffle)"),
-                Term("rotations", -1.0, param="w_rotations", doc="whole-body turns (fractional)"))
+                Term("rotations", -1.0, param="w_rotations", doc="whole-body turns (fractional)"),
+                Term("grounded_distance", -1.0, param="w_grounded_distance",
+                     doc="m the com travels right while some point touches (contact_distance "
+                         "read for pinned contacts: a flight earns nothing)"))
 
 
 def travel_measures(traj):
@@ -24,7 +27,8 @@ def travel_measures(traj):
             "max_height": secondary.max_height(traj.com[..., 1]),
             # signed along +x: forward travel while touching pays, sliding in place does not
             "contact_distance": secondary.contact_distance(traj.contact_force, cx, direction=1.0),
-            "rotations": secondary.rotations(pitch, whole=False)}
+            "rotations": secondary.rotations(pitch, whole=False),
+            "grounded_distance": secondary.grounded_distance(traj.contact_force, x)}
 
 
 def gait(traj, m, e=0):
@@ -36,7 +40,8 @@ def gait(traj, m, e=0):
             f"contact time: {pattern}"]
 
 
-TRAVEL_PARAMS = {"w_max_height": 0.0, "w_contact_distance": 0.0, "w_rotations": 0.0}
+TRAVEL_PARAMS = {"w_max_height": 0.0, "w_contact_distance": 0.0, "w_rotations": 0.0,
+                 "w_grounded_distance": 0.0}
 
 
 class TravelTask(Task):
@@ -46,7 +51,9 @@ class TravelTask(Task):
                   "success_distance": "com travel that counts as solved (m)",
                   "w_max_height": "weight of the max_height reward (Auslander's Table 3)",
                   "w_contact_distance": "weight of the contact_distance reward (shuffle)",
-                  "w_rotations": "weight of the rotations reward (cartwheel)"}
+                  "w_rotations": "weight of the rotations reward (cartwheel)",
+                  "w_grounded_distance": "weight of the grounded_distance reward (contact_distance "
+                                         "read for the paper's pinned contacts: travel without flight)"}
     terms = TRAVEL_TERMS
     success_threshold = "centre of mass travels ≥ success_distance (1 m) to the right"
     record_every = 20           # 50 frames/s resolve every gait event these terms use

@@ -324,6 +324,22 @@ def test_secondary_terms():
     assert S.rotations(np.stack([wrapped, np.zeros(400)])).tolist() == [2.0, 0.0]
 
 
+def test_grounded_distance_is_com_travel_while_some_point_touches():
+    """Frames 0-2 grounded (com 0 → 0.3), 3-4 airborne (→ 0.9), 5-6 grounded
+    (→ 1.2): the steps with a point down at both ends are 0→1, 1→2 and 5→6
+    (the landing step 4→5 and the flight earn nothing)."""
+    x = np.array([0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 1.2])
+    force = np.zeros((7, 2))
+    force[[0, 1, 2], 0] = 10.0
+    force[[5, 6], 1] = 10.0
+    assert S.grounded_distance(force, x) == pytest.approx(0.1 + 0.2 + 0.3)
+    assert S.grounded_distance(force, x, direction=-1.0) == pytest.approx(-0.6)
+    assert S.grounded_distance(np.full((7, 2), 10.0), x) == pytest.approx(1.2)   # a shuffle: all of it
+    assert S.grounded_distance(np.stack([force, 0 * force]), np.stack([x, x])).tolist() == pytest.approx([0.6, 0.0])
+    with pytest.raises(ValueError):
+        S.grounded_distance(force, x[:-1])
+
+
 def test_contact_distance_is_distance_traversed_not_jitter():
     # a foot sliding to and fro in place for 10 frames traverses nothing
     # (the old per-frame |Δx| sum paid 0.9 m for it)
@@ -375,7 +391,7 @@ def test_travel_validate_is_pure():
     before = dict(vars(task))
     task.validate()
     assert vars(task) == before and all(vars(task)[k] is v for k, v in before.items())
-    assert [t.weight for t in task.terms] == [-1.0, -0.0, -0.0, -2.0]
+    assert [t.weight for t in task.terms] == [-1.0, -0.0, -0.0, -2.0, -0.0]
 
 
 def test_table1_indices_and_normalized_trajectory():

@@ -47,6 +47,29 @@ def contact_distance(contact_force_frames, contact_x_frames,
     return np.abs(_stretch_sums(step, both)).sum(axis=(-2, -1))
 
 
+def grounded_distance(contact_force_frames, com_x_frames, force_threshold: float = 0.0,
+                      direction: float = 1.0) -> np.ndarray:
+    """Table 3's contact_distance read for pinned contacts: the distance the
+    centre of mass travels (along ``direction``) while the figure stays in
+    contact with the ground — summed over the frame steps at both ends of
+    which some point is down, so a flight earns nothing.
+
+    Why a second reading: Auslander et al.'s simulator pins a touching point
+    (no slip), so there a point in continuous contact traverses nothing and
+    the term can only measure the figure's travel while it keeps contact; a
+    shuffle (never airborne) earns its whole distance.  Ours slides under
+    Coulomb friction, where :func:`contact_distance` pays limbs for sliding.
+    """
+    force = np.asarray(contact_force_frames, dtype=np.float64)
+    x = np.asarray(com_x_frames, dtype=np.float64)
+    if force.ndim < 2 or force.shape[:-1] != x.shape:
+        raise ValueError(f"contact forces [..., n_frames, n_points] and com x [..., n_frames] "
+                         f"must share their frames, got {force.shape} and {x.shape}")
+    down = (force > force_threshold).any(axis=-1)
+    both = down[..., 1:] & down[..., :-1]
+    return np.sign(direction) * np.where(both, np.diff(x, axis=-1), 0.0).sum(axis=-1)
+
+
 def _stretch_sums(step, both):
     """Per run of True in ``both`` (axis −2), the sum of ``step`` over it,
     placed at the run's last entry (0 elsewhere)."""
