@@ -52,7 +52,8 @@ class HermanTouchObject(HermanTask):
     terms = (Term("object", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              Term("limits", 0.1 * MAIN_WEIGHT, param="w_limits",
-                  doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s"),
+                  doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s, "
+                      f"when the fingertip misses (≥ {TOUCH * 100:.0f} cm at the end)"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
@@ -83,7 +84,9 @@ class HermanTouchObject(HermanTask):
     def measure(self, traj):
         d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
         out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
-        out["limits"] = on_limits(traj, self.controlled, HOLD)
+        # a pose on its limits that misses: the trap of rate targets (a constant
+        # tree drives its joint to a limit); a touch on limits pays nothing
+        out["limits"] = on_limits(traj, self.controlled, HOLD) * (d[:, -1] >= TOUCH)
         out.update(style_measures(traj))
         return out
 

@@ -22,9 +22,9 @@ def test_benchmark_runs_only_what_its_file_lacks_and_tables_the_file(bench, tmp_
                                "cpu_s": 150.0, "load": 1.5, "final_cost": 0.1, "facts": []}) + "\n")   # no main_cpu_s: an older row
     calls = []
 
-    def fake(name, seed, tmp=None, targets=None, search=None, family=None):
+    def fake(name, seed, tmp=None, targets=None, search=None, family=None, params=None):
         calls.append((name, seed))
-        assert (targets, search, family) == (None, {}, {})      # no overrides given
+        assert (targets, search, family, params) == (None, {}, {}, {})      # no overrides given
         return {"config": name, "seed": seed, "success": seed != 2, "wall_s": 70.0 + seed, "cpu_s": 100.0,
                 "main_cpu_s": 50.0 + 25 * seed, "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
 
