@@ -162,3 +162,58 @@ def test_a_kernel_module_that_does_not_say_what_it_reads_gets_every_sense(tmp_pa
     ctrl.write_text(Path(schedule.KERNEL).read_text().replace("READS = 0", "UNRELATED = 0"))
     src = kernels.episode_source(str(ctrl), "planar")
     assert "READS = getattr(_controller, 'READS', 2)" in src
+
+
+def test_kernel_modules_set_every_option_numba_would_inherit():
+    """An unset option is inherited from the first kernel that compiles the
+    function, and the disk cache keeps that version: a GP module compiled first
+    from the 3-D loop (which contracts multiply-adds) gave other last bits than
+    one compiled first from the planar loop.  Every njit of a kernel module sets
+    fastmath, error_model and boundscheck (directly or through its JIT dict)."""
+    import ast
+    from gpmotion import controllers
+    for name, path in _shipped_kernel_modules().items():
+        module = cache.import_file(path)
+        for node in ast.walk(ast.parse(Path(path).read_text())):
+            if not isinstance(node, ast.FunctionDef):
+                continue
+            for dec in node.decorator_list:
+                if isinstance(dec, ast.Call) and getattr(dec.func, "id", "") == "njit":
+                    keys = {k.arg for k in dec.keywords if k.arg}
+                    for k in dec.keywords:
+                        if k.arg is None:                      # **FLAGS
+                            keys |= set(getattr(module, k.value.id))
+                    assert {"fastmath", "error_model", "boundscheck"} <= keys, (name, node.name)
+    assert controllers.KERNEL_JIT["fastmath"] is False
+
+
+_ORDER_SCRIPT = """
+import sys
+from gpmotion.task import get_task
+from gpmotion.families import make_family
+from gpmotion.replay import replay_genome
+import numpy as np
+out = []
+for name in sys.argv[1:]:
+    task = get_task(name)
+    fam = make_family("gp", task)
+    rng = np.random.default_rng(5)
+    genomes = [fam.random(rng) for _ in range(3)]
+    out.append([float(replay_genome(task, fam, fam.default_actuation, g)[1][0]).hex() for g in genomes])
+print(out[-1])
+"""
+
+
+@pytest.mark.slow
+def test_a_gp_rollout_does_not_depend_on_which_kernel_compiled_its_module_first(tmp_path):
+    """The same GP controllers on Herman, compiled in a fresh cache after the
+    planar lamp's kernel (which shares the primitive set's module) and alone:
+    the same bits (before every kernel module set its numba options, 1e-15
+    rad apart at once, and an evolved run went another way)."""
+    import subprocess
+    runs = []
+    for i, order in enumerate((["lamp_hop", "herman_touch_nose"], ["herman_touch_nose"])):
+        env = dict(__import__("os").environ, GPMOTION_CACHE=str(tmp_path / f"cache{i}"))
+        runs.append(subprocess.run([sys.executable, "-c", _ORDER_SCRIPT, *order], env=env,
+                                   check=True, capture_output=True, text=True).stdout)
+    assert runs[0] == runs[1]

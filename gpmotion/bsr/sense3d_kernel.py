@@ -31,18 +31,20 @@ import math
 
 from numba import njit
 
+from gpmotion.controllers import KERNEL_JIT_3D
+
 CI_HEADER = 6
 N_BODY = 10            # com_z, v (3), ω (3), up (3)
 N_SOURCES = 11         # the raw senses the body part is built from (+ yaw)
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT_3D)
 def init(ci, cf, cstate):
     cstate[0] = 0.0
     cstate[1] = 0.0
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT_3D)
 def sample(ci, senses, x):
     """The 3-D sense vector (raw units) from the figure's raw senses."""
     src = CI_HEADER
@@ -61,7 +63,7 @@ def sample(ci, senses, x):
         x[N_BODY + k] = senses[ci[base + k]]
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT_3D)
 def select(ci, cf, cstate, previous):
     """Rule with the highest positive score on the normalized senses in cstate."""
     n_rules, V, n_act = ci[0], ci[1], ci[2]
@@ -85,7 +87,7 @@ def select(ci, cf, cstate, previous):
 READS = 1          # RAW_SENSES (gpmotion.controllers): filtered from raw units
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT_3D)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules, V, n_act, every = ci[0], ci[1], ci[2], ci[3]
     step = int(cstate[1])

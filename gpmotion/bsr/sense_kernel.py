@@ -40,18 +40,20 @@ from __future__ import annotations
 
 from numba import njit
 
+from gpmotion.controllers import KERNEL_JIT
+
 CI_HEADER = 3          # R, V, n_act
 CF_RULE_HEADER = 2     # W, τ
 CSTATE_SIZE = 2
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def init(ci, cf, cstate):
     cstate[0] = 0.0    # active rule: rule 0, as Fig. 2 "Set i_active to 1"
     cstate[1] = 0.0    # number of control calls so far
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def select_rule(ci, cf, senses_norm, previous):
     """Index of the rule with the highest positive score, else ``previous``."""
     n_rules = ci[0]
@@ -81,7 +83,7 @@ def select_rule(ci, cf, senses_norm, previous):
 READS = 2          # NORMALIZED_SENSES (gpmotion.controllers): stimuli are boxes in [0, 1]
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_senses = ci[1]
     n_act = ci[2]

@@ -35,15 +35,17 @@ import math
 
 from numba import njit
 
+from gpmotion.controllers import KERNEL_JIT
+
 CSTATE_SIZE = 1
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def init(ci, cf, cstate):
     cstate[0] = 0.0
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def segment(t, t_per, n_rules):
     """Active rule at time t; clamped so rounding never leaves [0, R−1]."""
     phase = t - t_per * math.floor(t / t_per)      # t mod t_per, in [0, t_per)
@@ -55,7 +57,7 @@ def segment(t, t_per, n_rules):
     return r
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def variable_segment(t, t_per, cf, first, n_rules):
     """Active rule with boundaries cf[first : first + R − 1] (fractions of t_per)."""
     frac = (t - t_per * math.floor(t / t_per)) / t_per
@@ -68,7 +70,7 @@ def variable_segment(t, t_per, cf, first, n_rules):
 READS = 0          # NO_SENSES (gpmotion.controllers): rules switch on time only
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules = ci[0]
     n_act = ci[1]

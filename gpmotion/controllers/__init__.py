@@ -27,6 +27,9 @@ when a module does not say).  The rollout then computes no more than that
 each step (a run that records senses computes the raw ones anyway): an
 open-loop controller's step skips the senses, a GP's their normalization.
 
+Decorate a kernel module's functions with every numba option set
+(``@njit(**KERNEL_JIT)``, below): see the comment there.
+
 Batches are rectangular: ``ci[n_episodes, Li]``, ``cf[n_episodes, Lf]``
 (zero-padded), plus ``cstate_size``.  Python-side, a family's ``encode``
 turns plain-data genomes into a :class:`ControllerBatch`.
@@ -37,6 +40,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+
+# numba options of a kernel module's functions, all set: an option left unset is
+# inherited from the first kernel that compiles the function (numba's target-option
+# inheritance), and the on-disk cache keeps that one version, so a module shared by
+# the planar loop and the 3-D loop (which contracts multiply-adds) gave results
+# that hung in their last bits on which loop ran first on a machine.  These are
+# the planar loop's; a module only the 3-D loop calls may take ``KERNEL_JIT_3D``.
+KERNEL_JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
+KERNEL_JIT_3D = dict(cache=True, fastmath={"contract"}, error_model="numpy", boundscheck=False)
 
 # what a kernel module's control() reads (its optional READS constant)
 NO_SENSES, RAW_SENSES, NORMALIZED_SENSES = 0, 1, 2

@@ -11,15 +11,17 @@ Used by ``gpmotion.simulate``, the benchmark and tests.  ``ci = [mode, n_keys]``
 import numpy as np
 from numba import njit
 
+from gpmotion.controllers import KERNEL_JIT
+
 READS = 0          # NO_SENSES (gpmotion.controllers): targets depend on time only
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def init(ci, cf, cstate):
     pass
 
 
-@njit(cache=True)
+@njit(**KERNEL_JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     na = targets.shape[0]
     if ci[0] == 1:

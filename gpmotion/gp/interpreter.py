@@ -49,10 +49,15 @@ from numba import njit
 {imports}
 
 CLAMP = {clamp!r}
+# Every option numba would otherwise inherit from the first kernel that calls this
+# module (numba's target-option inheritance): compiled first from the 3-D loop, which
+# contracts multiply-adds, the cached code differed in the last bits from the code
+# compiled first from the planar loop, so a run's result hung on what ran first.
+JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
 READS = 1          # RAW_SENSES (gpmotion.controllers): terminals read raw senses
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def _clamp(v):
     if v != v:
         return 0.0
@@ -65,7 +70,7 @@ def _clamp(v):
 '''
 
 _RUN_TREE = '''
-@njit(cache=True)
+@njit(**JIT)
 def run_tree(ci, cf, tree_index, senses, stack):
     """Evaluate tree ``tree_index`` of this program; stack: the float64 cstate
     (scratch stack, then the subgoal flags from slot {stack_cap})."""
@@ -106,12 +111,12 @@ def run_tree(ci, cf, tree_index, senses, stack):
     return stack[0]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def init(ci, cf, cstate):
     cstate[:] = 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def update_flags(ci, cf, senses, cstate):
     """Latch subgoal flag j at 1.0 once its test holds (0 gt, 1 lt, 2 abs_lt)."""
     b = {header} + 3 * (ci[0] + ci[5])
@@ -123,7 +128,7 @@ def update_flags(ci, cf, senses, cstate):
             cstate[{stack_cap} + j] = 1.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def update_task_senses(ci, cf, senses, cstate):
     """Task sense j (the program after the trees) into slot {max_flags} + j."""
     first = {stack_cap} + {max_flags}
@@ -131,7 +136,7 @@ def update_task_senses(ci, cf, senses, cstate):
         cstate[first + j] = run_tree(ci, cf, ci[0] + j, senses, cstate)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     update_flags(ci, cf, senses, cstate)
     update_task_senses(ci, cf, senses, cstate)
@@ -204,7 +209,7 @@ def _branch(op: int, p: Primitive) -> str:
 
 
 def _copy(p: Primitive) -> str:
-    return f"@njit(cache=True, inline=\"always\")\n{p.source}\n"
+    return f"@njit(**JIT, inline=\"always\")\n{p.source}\n"
 
 
 def primitive_module_source(prims: list[Primitive]) -> str:
