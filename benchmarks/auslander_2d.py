@@ -30,6 +30,8 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-contact-w4, beryl-periodic-w4  the two contact_distance ones at weight 4
   star-grounded, beryl-periodic-grounded  the two with grounded_distance (w 2) for
                   contact_distance: the paper's term read for pinned contacts
+  star-contact-noslip, star-grounded-noslip  Star-Man's shuffle configurations on a
+                  no-slip ground (friction 5: the paper's pinned contacts, approximated)
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
 Runs are queued seed-major (every configuration's seed 0 first), so a study
@@ -87,6 +89,16 @@ CONFIGS = {
     "beryl-periodic-grounded": ("beryl_travel", "bsr-time", {"w_grounded_distance": 2.0},
                                 {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
                                 "Beryl time-based, t_per = 0.5 s, + grounded_distance (w 2), τ ≥ 0.2 s"),
+    # the paper's pinned contacts, approximated: friction μ = 5 (ours: 0.8), so a
+    # touching point holds on its anchor spring instead of sliding
+    "star-contact-noslip": ("starman_travel", "bsr-time",
+                            {"w_contact_distance": 2.0, "figure": "noslip:starman"}, {},
+                            ("shuffle", "periodic shuffle"),
+                            "Star-Man time-based + contact_distance (w 2), no-slip ground (μ = 5)"),
+    "star-grounded-noslip": ("starman_travel", "bsr-time",
+                             {"w_grounded_distance": 2.0, "figure": "noslip:starman"}, {},
+                             ("shuffle", "periodic shuffle"),
+                             "Star-Man time-based + grounded_distance (w 2), no-slip ground (μ = 5)"),
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
     "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},
@@ -110,6 +122,28 @@ def _fail(msg: str) -> None:
     sys.exit(2)
 
 
+NOSLIP_MU = 5.0
+
+
+def _resolved(params: dict) -> dict:
+    """A config's task parameters; ``figure = "noslip:NAME"`` becomes the spec of
+    figure NAME on a ground of friction NOSLIP_MU (stored in the run, as
+    ``gpmotion run --figure`` stores a variant)."""
+    out = dict(params)
+    fig = out.get("figure")
+    if isinstance(fig, str) and fig.startswith("noslip:"):
+        from gpmotion.figures import resolve_spec
+        base = fig.split(":", 1)[1]
+        out["figure"] = resolve_spec({"extends": base, "name": f"{base}_noslip",
+                                      "ground": {"mu": NOSLIP_MU}})
+    return out
+
+
+def _variant(params: dict) -> dict:
+    """The config's figure variant as its name (what a result records)."""
+    return {"figure": params["figure"]} if "figure" in params else {}
+
+
 def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     """One serial search of configuration ``name``; its best motion classified.
 
@@ -124,7 +158,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     from gpmotion.runconfig import RunConfig
     from gpmotion.task import get_task
     task_name, fam_name, params, options, _, _ = CONFIGS[name]
-    cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=dict(params),
+    cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=_resolved(params),
                     family_options=dict(options), threads=1,
                     search={"n_working": WORKING, "n_generations": budget // WORKING - 1,
                             "reseed_every": RESEED})
@@ -135,7 +169,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     genome, _, _ = run(cfg, run_dir, resume=resumed, quiet=True, artifacts=False)
     cpu = time.process_time() - c0
     log = list(csv.DictReader(open(run_dir / "log.csv", newline="")))
-    task = get_task(task_name, **params)
+    task = get_task(task_name, **_resolved(params))
     fam = make_family(fam_name, task, **options)
     traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, genome)
     gait, f = gaits.gait_of(traj)
@@ -145,7 +179,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
            "cpu_s": round(cpu, 1), "resumed": resumed,
            **{k: float(v[0]) for k, v in measures.items()},
            "features": {k: v for k, v in f.__dict__.items()},
-           "task": task_name, "params": task.params, "family": fam_name, "options": fam.options,
+           "task": task_name, "params": {**task.params, **_variant(params)}, "family": fam_name, "options": fam.options,
            "genome": fam.to_json(genome)}
     path = Path(out) / f"{name}-seed{seed}-{budget}.json"
     tmp = path.with_suffix(".tmp")
@@ -239,7 +273,7 @@ def filmstrips(results: dict, docs: Path) -> list[str]:
     for gait, (_, rec) in sorted(best.items()):
         if gait == "other":
             continue
-        task = get_task(rec["task"], **rec["params"])
+        task = get_task(rec["task"], **_resolved(rec["params"]))
         fam = make_family(rec["family"], task, **rec["options"])
         traj = replay_genome(task, fam, fam.default_actuation, fam.from_json(rec["genome"]))[0]
         path = docs / f"auslander_{task.figure.name}_{gait.replace(' ', '_')}.png"

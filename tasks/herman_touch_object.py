@@ -26,6 +26,21 @@ PRESETS = (            # pelvis frame (m)
     (0.35, 0.10, 0.65),    # 2: high, in front of the face and across to the left
 )
 
+# A preset's own weight of the limits term (the others: 0).  Target 1's runs
+# that miss end 11-14 cm short on a pose with 4 of the arm's 6 joints on their
+# limits (a constant tree drives a rate target to its limit: the easy
+# near-solution there); charged for it, seeds 0-2 all solve (1 / 3 without).
+# Targets 0 and 2 solve on poses with joints on their limits, and charged the
+# same they solved 2 / 3 and 0 / 3 (session 13, docs/notes/herman.md).
+PRESET_LIMITS = {1: 2.0}
+
+
+def _preset(target) -> int | None:
+    try:
+        return int(float(target))
+    except (TypeError, ValueError):
+        return None                     # Task.__init__ reports the bad value
+
 
 @register_task
 class HermanTouchObject(HermanTask):
@@ -47,13 +62,13 @@ class HermanTouchObject(HermanTask):
                             "2 high across to the left; -1 uses x, y, z",
                   "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
                   "z": "object above the pelvis (m)", "seconds": "episode length (s)",
-                  "w_limits": "weight of the limits term (per unit: 1 = a 10 cm miss)"}
+                  "w_limits": "weight of the limits term (per unit: 1 = a 10 cm miss; "
+                              "default 0, target 1: 2)"}
     goal_label = "object"          # pictures: the scene goal, captioned
     terms = (Term("object", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              Term("limits", 0.1 * MAIN_WEIGHT, param="w_limits",
-                  doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s, "
-                      f"when the fingertip misses (≥ {TOUCH * 100:.0f} cm at the end)"),
+                  doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s"),
              *style_terms())
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
@@ -70,6 +85,9 @@ class HermanTouchObject(HermanTask):
         return self.figure.model.fixed_pos + self.figure.model.fixed_rot @ rel
 
     def __init__(self, **overrides):
+        preset = _preset(overrides.get("target", type(self).params["target"]))
+        if preset in PRESET_LIMITS and "w_limits" not in overrides:
+            overrides["w_limits"] = PRESET_LIMITS[preset]
         super().__init__(**overrides)
         f = self.figure
         shoulder = geometry3d.sites_world(f, f.q_default)[f.site_names.index("shoulder_r")]
@@ -84,9 +102,7 @@ class HermanTouchObject(HermanTask):
     def measure(self, traj):
         d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
         out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
-        # a pose on its limits that misses: the trap of rate targets (a constant
-        # tree drives its joint to a limit); a touch on limits pays nothing
-        out["limits"] = on_limits(traj, self.controlled, HOLD) * (d[:, -1] >= TOUCH)
+        out["limits"] = on_limits(traj, self.controlled, HOLD)
         out.update(style_measures(traj))
         return out
 

@@ -296,12 +296,12 @@ def test_the_limits_term_counts_the_arm_joints_resting_on_a_limit(herman):
     assert on_limits(tr)[0] == 0.0
     task = get_task("herman_touch_object", target=1, w_limits=2.0)
     assert {t.name: t.weight for t in task.terms}["limits"] == pytest.approx(2.0)
-    # the term counts a pose on its limits only while it misses the object
-    held = _still(herman, q)
-    assert task.measure(held)["limits"][0] == pytest.approx(2 / 6)         # 0.43 m away
-    tip = herman.model.fixed_rot.T @ (_site(herman, q, "fingertip_r") - herman.model.fixed_pos)
-    at = get_task("herman_touch_object", x=tip[0], y=tip[1], z=tip[2], w_limits=2.0)
-    assert at.measure(held)["object_end"][0] < 1e-6 and at.measure(held)["limits"][0] == 0.0
+    assert task.measure(_still(herman, q))["limits"][0] == pytest.approx(2 / 6)
+    # target 1 charges it by default (its misses rest on the limits), the others do not
+    weight = {t: {x.name: x.weight for x in get_task("herman_touch_object", target=t).terms}["limits"]
+              for t in (-1, 0, 1, 2)}
+    assert weight == {-1: 0.0, 0: 0.0, 1: pytest.approx(2.0), 2: 0.0}
+    assert get_task("herman_touch_object", target=1, w_limits=0).params["w_limits"] == 0.0
 
 
 # ---------------------------------------------------------------- success at rest
