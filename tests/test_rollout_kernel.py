@@ -122,12 +122,6 @@ def test_every_way_of_giving_a_start_state_uses_one_kernel_signature():
     assert len(kernel.rollout_batch.signatures) == 1
 
 
-def _names_read_by_control(source: str) -> set[str]:
-    import ast
-    [fn] = [n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef) and n.name == "control"]
-    return {n.id for n in ast.walk(fn) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
-
-
 def _shipped_kernel_modules():
     from gpmotion.bsr import genome, senses3d
     from gpmotion.families import make_family
@@ -137,31 +131,6 @@ def _shipped_kernel_modules():
     gp_module = fam.encode([fam.random(rng) for _ in range(2)]).module
     return {"schedule": schedule.KERNEL, "bsr-time": genome.TIME_KERNEL,
             "bsr-sense": genome.SENSE_KERNEL, "bsr-sense 3-D": senses3d.KERNEL, "gp": gp_module}
-
-
-def test_each_kernel_module_reads_no_more_senses_than_it_declares():
-    """READS lets the loop skip the senses (0) or their normalization (1): a
-    module whose control() read more than it declares would see stale zeros."""
-    from gpmotion.controllers import NO_SENSES, NORMALIZED_SENSES, RAW_SENSES
-    declared = {}
-    for name, path in _shipped_kernel_modules().items():
-        src = Path(path).read_text()
-        reads = cache.import_file(path).READS
-        used = _names_read_by_control(src)
-        declared[name] = reads
-        if reads < NORMALIZED_SENSES:
-            assert "senses_norm" not in used, name
-        if reads < RAW_SENSES:
-            assert "senses" not in used, name
-    assert declared == {"schedule": NO_SENSES, "bsr-time": NO_SENSES, "bsr-sense": NORMALIZED_SENSES,
-                        "bsr-sense 3-D": RAW_SENSES, "gp": RAW_SENSES}
-
-
-def test_a_kernel_module_that_does_not_say_what_it_reads_gets_every_sense(tmp_path):
-    ctrl = tmp_path / "plain_kernel.py"
-    ctrl.write_text(Path(schedule.KERNEL).read_text().replace("READS = 0", "UNRELATED = 0"))
-    src = kernels.episode_source(str(ctrl), "planar")
-    assert "READS = getattr(_controller, 'READS', 2)" in src
 
 
 def test_kernel_modules_set_every_option_numba_would_inherit():

@@ -84,7 +84,6 @@ def select(ci, cf, cstate, previous):
     return best
 
 
-READS = 1          # RAW_SENSES (gpmotion.controllers): filtered from raw units
 
 
 @njit(**KERNEL_JIT_3D)

@@ -80,7 +80,6 @@ def select_rule(ci, cf, senses_norm, previous):
     return best
 
 
-READS = 2          # NORMALIZED_SENSES (gpmotion.controllers): stimuli are boxes in [0, 1]
 
 
 @njit(**KERNEL_JIT)

@@ -67,7 +67,6 @@ def variable_segment(t, t_per, cf, first, n_rules):
     return r
 
 
-READS = 0          # NO_SENSES (gpmotion.controllers): rules switch on time only
 
 
 @njit(**KERNEL_JIT)

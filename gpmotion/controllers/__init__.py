@@ -20,13 +20,6 @@ functions, imported by the generated rollout kernel (gpmotion.sim.rollout):
 * ``taus``   float64[n_act] out: time constants for ``kinematic`` actuation
   (pre-filled with the rollout's default τ; a family may overwrite them)
 
-A kernel module may also say which senses ``control`` reads, as a module
-constant ``READS``: ``NO_SENSES`` (0: time only), ``RAW_SENSES`` (1:
-``senses``) or ``NORMALIZED_SENSES`` (2: ``senses_norm`` too; the default
-when a module does not say).  The rollout then computes no more than that
-each step (a run that records senses computes the raw ones anyway): an
-open-loop controller's step skips the senses, a GP's their normalization.
-
 Decorate a kernel module's functions with every numba option set
 (``@njit(**KERNEL_JIT)``, below): see the comment there.
 
@@ -49,9 +42,6 @@ import numpy as np
 # the planar loop's; a module only the 3-D loop calls may take ``KERNEL_JIT_3D``.
 KERNEL_JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
 KERNEL_JIT_3D = dict(cache=True, fastmath={"contract"}, error_model="numpy", boundscheck=False)
-
-# what a kernel module's control() reads (its optional READS constant)
-NO_SENSES, RAW_SENSES, NORMALIZED_SENSES = 0, 1, 2
 
 
 class ControllerBatch(NamedTuple):

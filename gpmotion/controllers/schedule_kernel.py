@@ -13,7 +13,6 @@ from numba import njit
 
 from gpmotion.controllers import KERNEL_JIT
 
-READS = 0          # NO_SENSES (gpmotion.controllers): targets depend on time only
 
 
 @njit(**KERNEL_JIT)

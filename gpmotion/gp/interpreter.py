@@ -54,7 +54,6 @@ CLAMP = {clamp!r}
 # contracts multiply-adds, the cached code differed in the last bits from the code
 # compiled first from the planar loop, so a run's result hung on what ran first.
 JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
-READS = 1          # RAW_SENSES (gpmotion.controllers): terminals read raw senses
 
 
 @njit(**JIT, inline="always")

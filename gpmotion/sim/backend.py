@@ -12,10 +12,8 @@ A backend is a module (:mod:`gpmotion.sim.backend_planar`,
 
   - ``workspace(M, S, nv, contact) -> Work``: per-episode scratch (a NamedTuple),
     friction anchors taken from ``contact``, the scene's object (if any) at its start;
-  - ``observe(M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm, reads)
-    -> deepest pole penetration``: kinematics, contact forces, com, and the
-    senses the controller reads (``reads``: its module's READS, at least 1 when
-    senses are recorded; gpmotion.controllers);
+  - ``observe(M, S, goal, q, qd, work, cforce, com, t, senses, senses_norm)
+    -> deepest pole penetration``: kinematics, contact forces, com, senses;
   - ``advance(M, S, q, qd, targets, taus, actuation, dt, limit, work,
     energy) -> (finite?, energy)``: torques, dynamics, one integration step;
   - ``save_contact(work, contact)``: the friction state at the end;
@@ -54,8 +52,8 @@ def workspace(M, S, nv, contact):
     return backend_of(M).workspace(M, S, nv, contact)
 
 
-def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads=2):
-    return backend_of(M).observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads)
+def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
+    return backend_of(M).observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm)
 
 
 def advance(M, S, q, qd, targets, taus, actuation, dt, limit, w, energy):

@@ -13,7 +13,6 @@ from numba import njit
 from ..model import FREE3D, HINGE3D, SLIDE3D
 from . import geometry3d
 from .grip3d import N_OB, OB_REC, object_start, object_step
-from .senses import normalize_senses
 from .spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass, compute_senses3d,
                         ground_contacts, integrate, joint_torques, kinematics, pole_contacts)
 
@@ -74,10 +73,9 @@ def workspace(M, S, nv, contact):
 
 
 @njit(**STEP)
-def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads):
-    """Kinematics, contact forces (into w.fext), com and the senses ``reads`` asks
-    for (0 none, 1 raw, 2 raw and normalized: gpmotion.controllers' READS) of the
-    current state; returns the deepest pole penetration."""
+def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
+    """Kinematics, contact forces (into w.fext), com and senses of the current state;
+    returns the deepest pole penetration."""
     kinematics(M, q, qd, w.R, w.pos, w.E, w.r, w.v, w.cbias)
     fext = w.fext
     for i in range(fext.shape[0]):
@@ -88,10 +86,7 @@ def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads):
     if S.poles.shape[0] > 0:       # a call, not inlined: most scenes have no poles
         pen = pole_contacts(M, S, w.R, w.pos, w.v, fext)
     centre_of_mass(M, w.R, w.pos, w.v, com)
-    if reads > 0:
-        compute_senses3d(M, goal, q, qd, w.R, w.pos, w.v, com, cforce, t, senses)
-    if reads > 1:
-        normalize_senses(M, senses, senses_norm)
+    compute_senses3d(M, goal, q, qd, w.R, w.pos, w.v, com, cforce, t, senses, senses_norm)
     return pen
 
 

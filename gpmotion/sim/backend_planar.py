@@ -17,7 +17,7 @@ from ..model import REVOLUTE, SLIDE_X, SLIDE_Z
 from . import geometry
 from .planar import (aba, centre_of_mass, ground_contacts, integrate, joint_torques, kinematics,
                      pole_contacts)
-from .senses import compute_senses, normalize_senses
+from .senses import compute_senses
 
 NAME = "planar"
 CONTACT_WIDTH = 2          # friction state per contact point: anchor x, touching (0/1)
@@ -62,10 +62,9 @@ def workspace(M, S, nv, contact):
 
 
 @njit(**STEP)
-def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads):
-    """Kinematics, contact forces (into w.fext), com and the senses ``reads`` asks
-    for (0 none, 1 raw, 2 raw and normalized: gpmotion.controllers' READS) of the
-    current state; returns the deepest pole penetration."""
+def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
+    """Kinematics, contact forces (into w.fext), com and senses of the current state;
+    returns the deepest pole penetration."""
     kinematics(M, q, qd, w.pose, w.X, w.v, w.cbias, w.cs)
     fext = w.fext
     for i in range(fext.shape[0]):
@@ -77,10 +76,7 @@ def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm, reads):
     if S.poles.shape[0] > 0:       # a call, not inlined: most scenes have no poles
         pen = pole_contacts(M, S, w.pose, w.cs, w.v, fext)
     centre_of_mass(M, w.pose, w.cs, w.v, com)
-    if reads > 0:
-        compute_senses(M, goal, q, qd, w.pose, w.cs, w.v, com, cforce, t, senses)
-    if reads > 1:
-        normalize_senses(M, senses, senses_norm)
+    compute_senses(M, goal, q, qd, w.pose, w.cs, w.v, com, cforce, t, senses, senses_norm)
     return pen
 
 

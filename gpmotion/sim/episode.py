@@ -20,7 +20,7 @@ from numba import njit, prange
 
 from gpmotion.sim.borrow import borrowed
 from gpmotion.sim.backend import JIT, advance, observe, save_contact, store_object, workspace  # backend
-from gpmotion.controllers.schedule_kernel import READS, control as ctrl_control, init as ctrl_init  # controller
+from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
 
 
 def run_episode(M, S, goal, st, e, start, prog, out):
@@ -38,7 +38,6 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     has_obj = S.obj.shape[0] > 0
     dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
     record_senses = st.record_senses
-    reads = max(READS, 1) if record_senses else READS     # the senses this step must compute
     nc = M.cp_link.shape[0]
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
@@ -63,7 +62,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     status[1] = -1
     for step in range(n_steps + 1):
         t = step * dt
-        pen = observe(M, S, goal, q, qd, work, cforce, com, t, senses_all, senses_norm, reads)
+        pen = observe(M, S, goal, q, qd, work, cforce, com, t, senses_all, senses_norm)
         total = 0.0
         for k in range(nc):
             total += cforce[k]

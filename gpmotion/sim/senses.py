@@ -98,10 +98,9 @@ def sense_layout(backend, actuators, contacts, lo, hi, total_mass, overrides, si
 
 
 @njit(cache=True, error_model="numpy", boundscheck=False, inline="always")
-def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses):
-    """Fill ``senses`` (n_senses + 1 entries: the last is scratch) from the
-    current kinematic state, at ``M.sense_at`` (their [0, 1] view:
-    :func:`normalize_senses`).
+def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses, senses_norm):
+    """Fill ``senses`` (n_senses + 1 entries: the last is scratch) and
+    ``senses_norm`` from the current kinematic state, at ``M.sense_at``.
 
     ``pose[i] = (θ, x, z)`` world pose of link i, ``cs[i] = (cos θ, sin θ)``,
     ``v[i]`` its spatial velocity in link coordinates, ``com = (x, z, vx, vz)``.
@@ -131,6 +130,7 @@ def compute_senses(M, goal, q, qd, pose, cs, v, com, cforce, t, senses):
     senses[at[COM_X]] = com[0]
     senses[at[COM_VX]] = com[2]
     joint_senses(senses, at[ANGLE], at[RATE], at[FORCE], q, qd, M.act_dof, M.act_dof, cforce)
+    normalize_senses(M, senses, senses_norm)
 
 
 @njit(cache=True, error_model="numpy", boundscheck=False, inline="always")

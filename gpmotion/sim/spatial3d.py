@@ -62,7 +62,7 @@ from numba import njit
 
 from .actuation import apply_servos, limit_torque
 from .poles import closest_to_pole
-from .senses import SLOTS, joint_senses
+from .senses import SLOTS, joint_senses, normalize_senses
 
 HINGE, SLIDE, FREE = 0, 1, 2
 
@@ -882,9 +882,9 @@ def integrate(M, q, qd, qdd, dt, limit):
 
 
 @njit(**_INLINE)
-def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses):
-    """Fill ``senses`` (n_senses + 1 entries: the last is scratch) at ``M.sense_at``
-    (layout and the [0, 1] view, ``normalize_senses``: gpmotion.sim.senses).
+def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses, senses_norm):
+    """Fill ``senses`` (n_senses + 1 entries: the last is scratch) / ``senses_norm``
+    at ``M.sense_at`` (layout: gpmotion.sim.senses).
 
     Orientation: ``R_base = Rz(yaw) · Ry(−pitch) · Rx(roll)`` — pitch is
     positive nose-up (a rotation about −y), the planar kernel's convention,
@@ -946,3 +946,4 @@ def compute_senses3d(M, goal, q, qd, R, pos, v, com, cforce, t, senses):
         senses[site0 + 3 * k] = px - g0
         senses[site0 + 3 * k + 1] = py - g1
         senses[site0 + 3 * k + 2] = pz - g2
+    normalize_senses(M, senses, senses_norm)
