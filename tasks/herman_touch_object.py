@@ -29,9 +29,10 @@ PRESETS = (            # pelvis frame (m)
 # A preset's own weight of the limits term (the others: 0).  Target 1's runs
 # that miss end 11-14 cm short on a pose with 4 of the arm's 6 joints on their
 # limits (a constant tree drives a rate target to its limit: the easy
-# near-solution there); charged for it, seeds 0-2 all solve (1 / 3 without).
-# Targets 0 and 2 solve on poses with joints on their limits, and charged the
-# same they solved 2 / 3 and 0 / 3 (session 13, docs/notes/herman.md).
+# near-solution there); charged for it, 3 / 5 seeds solve (2 / 5 without) and
+# the two misses touch the object but still move.  Targets 0 and 2 solve on
+# poses with joints on their limits, and charged the same they solved 2 / 3 and
+# 0 / 3 (session 13, docs/notes/herman.md).
 PRESET_LIMITS = {1: 2.0}
 
 
@@ -56,7 +57,7 @@ class HermanTouchObject(HermanTask):
     gp_targets = "rate"
     # The last 10 of the 50 generations tune the best controller (--polish; memetic GP):
     # session 12, 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
-    # 20 of 50: 3, 3, 4); docs/notes/herman.md.
+    # 20 of 50: 3, 3, 4; target 1 with the limits term, session 13: 3); docs/notes/herman.md.
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
