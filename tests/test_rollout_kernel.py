@@ -175,13 +175,14 @@ print(out[-1])
 
 @pytest.mark.slow
 def test_a_gp_rollout_does_not_depend_on_which_kernel_compiled_its_module_first(tmp_path):
-    """The same GP controllers on Herman, compiled in a fresh cache after the
-    planar lamp's kernel (which shares the primitive set's module) and alone:
-    the same bits (before every kernel module set its numba options, 1e-15
-    rad apart at once, and an evolved run went another way)."""
+    """The same GP controllers on Herman (touch_object: rate targets, whose law
+    integrates with a multiply-add), compiled in a fresh cache after the planar
+    lamp's kernel (which shares the primitive set's module) and alone: the same
+    bits (before every kernel module set its numba options, 1e-15 rad apart at
+    once, and an evolved run went another way)."""
     import subprocess
     runs = []
-    for i, order in enumerate((["lamp_hop", "herman_touch_nose"], ["herman_touch_nose"])):
+    for i, order in enumerate((["lamp_hop", "herman_touch_object"], ["herman_touch_object"])):
         env = dict(__import__("os").environ, GPMOTION_CACHE=str(tmp_path / f"cache{i}"))
         runs.append(subprocess.run([sys.executable, "-c", _ORDER_SCRIPT, *order], env=env,
                                    check=True, capture_output=True, text=True).stdout)
