@@ -158,7 +158,8 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     from gpmotion.runconfig import RunConfig
     from gpmotion.task import get_task
     task_name, fam_name, params, options, _, _ = CONFIGS[name]
-    cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=_resolved(params),
+    resolved = _resolved(params)
+    cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=resolved,
                     family_options=dict(options), threads=1,
                     search={"n_working": WORKING, "n_generations": budget // WORKING - 1,
                             "reseed_every": RESEED})
@@ -169,7 +170,7 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     genome, _, _ = run(cfg, run_dir, resume=resumed, quiet=True, artifacts=False)
     cpu = time.process_time() - c0
     log = list(csv.DictReader(open(run_dir / "log.csv", newline="")))
-    task = get_task(task_name, **_resolved(params))
+    task = get_task(task_name, **resolved)
     fam = make_family(fam_name, task, **options)
     traj, costs, measures, _ = replay_genome(task, fam, fam.default_actuation, genome)
     gait, f = gaits.gait_of(traj)

@@ -84,8 +84,6 @@ def select(ci, cf, cstate, previous):
     return best
 
 
-
-
 @njit(**KERNEL_JIT_3D)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules, V, n_act, every = ci[0], ci[1], ci[2], ci[3]

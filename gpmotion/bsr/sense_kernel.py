@@ -80,8 +80,6 @@ def select_rule(ci, cf, senses_norm, previous):
     return best
 
 
-
-
 @njit(**KERNEL_JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_senses = ci[1]

@@ -67,8 +67,6 @@ def variable_segment(t, t_per, cf, first, n_rules):
     return r
 
 
-
-
 @njit(**KERNEL_JIT)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
     n_rules = ci[0]

@@ -40,6 +40,8 @@ import numpy as np
 # the planar loop and the 3-D loop (which contracts multiply-adds) gave results
 # that hung in their last bits on which loop ran first on a machine.  These are
 # the planar loop's; a module only the 3-D loop calls may take ``KERNEL_JIT_3D``.
+# numba's cache of a module that imports them is keyed by that module's file only:
+# after editing them, clear the __pycache__ of gpmotion/bsr and gpmotion/controllers.
 KERNEL_JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
 KERNEL_JIT_3D = dict(cache=True, fastmath={"contract"}, error_model="numpy", boundscheck=False)
 

@@ -14,7 +14,6 @@ from numba import njit
 from gpmotion.controllers import KERNEL_JIT
 
 
-
 @njit(**KERNEL_JIT)
 def init(ci, cf, cstate):
     pass

@@ -30,6 +30,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gpmotion.cache import digest, import_file, write_module
+from gpmotion.controllers import KERNEL_JIT
 from gpmotion.gp.opcodes import (HEADER, LAW_WIDTH, OP_JUMP, OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG,
                                  OP_PUSH_SENSE, RATE_STATE, STACK_CAP)
 from gpmotion.gp.primitives import CLAMP, Primitive
@@ -49,11 +50,7 @@ from numba import njit
 {imports}
 
 CLAMP = {clamp!r}
-# Every option numba would otherwise inherit from the first kernel that calls this
-# module (numba's target-option inheritance): compiled first from the 3-D loop, which
-# contracts multiply-adds, the cached code differed in the last bits from the code
-# compiled first from the planar loop, so a run's result hung on what ran first.
-JIT = dict(cache=True, fastmath=False, error_model="numpy", boundscheck=False)
+JIT = {jit!r}    # gpmotion.controllers.KERNEL_JIT, written out: the file's hash covers it
 
 
 @njit(**JIT, inline="always")
@@ -215,7 +212,7 @@ def primitive_module_source(prims: list[Primitive]) -> str:
     """Module with just the njit copies (used by check_primitive)."""
     imports = sorted({line for p in prims for line in p.imports.splitlines()})
     head = _HEAD.format(names=", ".join(p.name for p in prims),
-                        imports="\n".join(imports), clamp=float(CLAMP))
+                        imports="\n".join(imports), clamp=float(CLAMP), jit=KERNEL_JIT)
     return head + "\n".join(_copy(p) for p in prims)
 
 
