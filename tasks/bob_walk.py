@@ -8,8 +8,9 @@ ahead of the other) before falling, facing within 45° of the start heading.
 """
 import numpy as np
 
+from gpmotion.bsr import secondary3d as s3
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._creature3d import DISTANCE, FALL, SIDEWAYS, CreatureTask
+from gpmotion.tasks._creature3d import DISTANCE, FACTS, FALL, SIDEWAYS, CreatureTask
 
 
 @register_task
@@ -58,3 +59,59 @@ class BobWalkV2(BobWalk):
     terms = (*BobWalk.terms,
              Term("facing", 1.0, param="w_facing", doc="mean |heading − start heading| (rad)"))
     facts = ("steps", "forward", "sideways", "facing", "fallen")
+
+
+@register_task
+class BobWalkV3(BobWalkV2):
+    """v3: a step is the feet taking turns, and steps are rewarded.  v1/v2
+    count every touchdown of a foot ≥ 5 cm ahead of the other, so a leading
+    foot that bounces or chatters in place, or stamps again and again while
+    the other foot drags behind, counts many times (``touchdowns``, still
+    reported).  v3 counts a touchdown only when the previous counted step
+    was the other foot's (``count_steps(..., alternate=True)``): each step
+    passes the other foot by ≥ 5 cm.  And where v1/v2 reward only distance
+    and foot motion, which a search met with shuffles and lunges that count
+    0-3 steps, v3 adds ``w_steps`` per counted step to the reward, the
+    success criterion itself; the fall and facing penalties are v2's.
+    Success: ≥ 5 such steps before falling, facing within 45°."""
+    version = 3
+    params = {**BobWalkV2.params, "w_steps": 0.2}
+    param_docs = {**BobWalkV2.param_docs,
+                  "success_steps": "alternating forward steps before falling that count as solved",
+                  "w_steps": "reward per alternating forward step"}
+    terms = (*BobWalkV2.terms,
+             Term("steps", -1.0, param="w_steps",
+                  doc="alternating forward steps (each foot lands ≥ 5 cm ahead of the other, "
+                      "the feet taking turns) before falling, facing within 45°"))
+    success_threshold = "≥ 5 alternating forward steps before falling, facing forward"
+    facts = ("steps", "touchdowns", "forward", "sideways", "facing", "fallen")
+
+    def measure(self, traj):
+        m = super().measure(traj)
+        m["touchdowns"], m["steps"] = m["steps"], alternating_steps(self, traj)
+        return m
+
+    def describe(self, traj, m, e=0):
+        facts = {**FACTS, "touchdowns": lambda m, e: f"{int(m['touchdowns'][e])} touchdowns ahead"}
+        return [", ".join(facts[f](m, e) for f in self.facts)]
+
+
+def alternating_steps(task, traj):
+    """Alternating steps per episode: the feet's forces, forward positions,
+    falls and heading as ``creature_measures`` reads them (v1/v2's count),
+    counted with ``secondary3d.count_steps(..., alternate=True)``."""
+    fig = traj.figure
+    quat = traj.base()[..., 3:7]
+    yaw = s3.heading(quat)
+    other = [k for k, n in enumerate(fig.contact_names) if n not in task.feet]
+    fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other],
+                     task.max_tilt, task.min_height)
+    cut = slice(None, None)
+    if task.params.get("hold"):
+        cut = slice(None, int(round(task.motion_seconds / (task.dt * task.record_every))) + 1)
+    yaw, fell = yaw[..., cut], fell[..., cut]
+    xy = traj.sites()[..., cut, [fig.site_names.index(n) for n in task.foot_sites], :2]
+    fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
+    force = np.stack([traj.contact_force[..., cut, [fig.contact_names.index(n) for n in g]].sum(-1)
+                      for g in task.foot_groups], -1)
+    return s3.count_steps(force, fwd, fell, yaw, alternate=True).astype(np.float64)

@@ -355,8 +355,11 @@ def test_creature_reports_read_their_facts_in_order():
         f"heading change 90°, forward 1.23 m, {fallen}"]
     assert gpmotion.get_task("bob_walk-v1").describe(None, m) == [
         f"3 forward steps, forward 1.23 m, sideways 0.05 m, rotation 45°, {fallen}"]
-    assert gpmotion.get_task("bob_walk").describe(None, m) == [
+    assert gpmotion.get_task("bob_walk-v2").describe(None, m) == [
         f"3 forward steps, forward 1.23 m, sideways 0.05 m, facing 30° away on average, {fallen}"]
+    assert gpmotion.get_task("bob_walk").describe(None, {**m, "touchdowns": np.array([4.0])}) == [
+        f"3 forward steps, 4 touchdowns ahead, forward 1.23 m, sideways 0.05 m, "
+        f"facing 30° away on average, {fallen}"]
 
 
 def test_a_walk_that_topples_after_its_last_frame_fails_rex_walk_v2():
@@ -397,12 +400,60 @@ def test_bob_walk_v2_charges_the_waddle_v1_did_not_see():
     v1, fam1, act, genome, _ = load_controller(Path(__file__).parent / "data" / "bob_walk_v1_waddle.json")
     assert v1.id == "bob_walk-v1"
     _, c1, m1, _ = replay_genome(v1, fam1, act, genome)
-    v2 = gpmotion.get_task("bob_walk")
+    v2 = gpmotion.get_task("bob_walk-v2")
     _, c2, m2, _ = replay_genome(v2, make_family(fam1.name, v2, **fam1.options), act, genome)
     assert m1["steps"][0] == 1 and np.degrees(m1["rotation"][0]) < 20
     assert np.degrees(m2["facing"][0]) > 15
     extra = 1.0 * m2["facing"] + (10.0 - 2.0) * m2["fall"]          # v2's added charges
     assert c2[0] == pytest.approx(c1[0] + extra[0], rel=1e-9)
+
+
+def test_alternating_steps_do_not_count_a_foot_that_bounces_or_limps_ahead():
+    """v1/v2 count every touchdown of a foot ≥ 5 cm ahead of the other; a
+    foot that bounces in place ahead, or lands ahead again after the other
+    foot stepped back, counts each time.  ``alternate`` (bob_walk-v3) counts
+    a step only when the feet take turns."""
+    # L lands 0.2 m ahead, then bounces three times in place; R never moves
+    force = np.array([[1, 1], [0, 1], [1, 1], [0, 1], [1, 1], [0, 1], [1, 1], [0, 1], [1, 1]], float)
+    fwd = np.array([[0, 0]] * 2 + [[0.2, 0]] * 7, float)
+    ok, yaw = np.zeros(9, bool), np.zeros(9)
+    assert s3.count_steps(force, fwd, ok, yaw) == 4                   # the old count: 4 "steps"
+    assert s3.count_steps(force, fwd, ok, yaw, alternate=True) == 1
+    # then R passes L and lands 0.2 m ahead of it: a second step
+    force2 = np.vstack([force, [[1, 0], [1, 1]]])
+    fwd2 = np.vstack([fwd, [[0.2, 0.2], [0.2, 0.4]]])
+    assert s3.count_steps(force2, fwd2, np.zeros(11, bool), np.zeros(11), alternate=True) == 2
+    # a limp: L steps ahead, R steps back (behind L: not a step), L lands ahead again
+    force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
+    fwd = np.array([[0, 0], [0, 0], [0.3, 0], [0.3, 0], [0.3, 0.1], [0.3, 0.1], [0.25, 0.1]])
+    assert s3.count_steps(force, fwd, np.zeros(7, bool), np.zeros(7)) == 2
+    assert s3.count_steps(force, fwd, np.zeros(7, bool), np.zeros(7), alternate=True) == 1
+    # alternating feet count as before, and batches count per episode
+    force = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 1], [0, 1], [1, 1]], float)
+    fwd = np.array([[0, 0], [0, 0], [0.2, 0], [0.2, 0], [0.2, 0.4], [0.2, 0.4], [0.6, 0.4]])
+    batch = [np.stack([force, force]), np.stack([fwd, fwd]), np.zeros((2, 7), bool),
+             np.stack([np.zeros(7), np.r_[0.0, np.full(6, 1.0)]])]
+    assert s3.count_steps(*batch, alternate=True).tolist() == [3, 0]
+
+
+def test_bob_walk_v3_counts_alternating_steps_and_rewards_them():
+    """This bsr-time controller (bob_walk-v2, seed 0, 10,000 evaluations)
+    scored "3 forward steps" under v2: R lands 9 cm ahead, L 27 cm ahead, R
+    lands back behind L, and L lands 16 cm ahead of R but 5 cm behind where
+    it last landed.  v3 counts the first two (the feet took turns), keeps
+    v2's count as ``touchdowns``, and rewards 0.2 per step on top of v2's
+    cost."""
+    from gpmotion.replay import load_controller, replay_genome
+    v2, fam2, act, genome, _ = load_controller(Path(__file__).parent / "data" / "bob_walk_v2_limp.json")
+    assert v2.id == "bob_walk-v2"
+    _, c2, m2, _ = replay_genome(v2, fam2, act, genome)
+    v3 = gpmotion.get_task("bob_walk")
+    assert v3.id == "bob_walk-v3"
+    _, c3, m3, ok3 = replay_genome(v3, make_family(fam2.name, v3, **fam2.options), act, genome)
+    assert m2["steps"][0] == 3 and m3["touchdowns"][0] == 3 and m3["steps"][0] == 2
+    assert c3[0] == pytest.approx(c2[0] - 0.2 * 2, rel=1e-9)
+    assert not ok3[0]
+    assert gpmotion.get_task("bob_walk", success_steps=2.0).success(None, m3)[0]
 
 
 def test_a_stage_run_alone_is_the_composite_phase_exactly(tmp_path):

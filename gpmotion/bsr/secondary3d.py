@@ -21,7 +21,8 @@ next axis), numpy only:
 * feet_forward  mean forward displacement of the feet (m)
 * count_steps   touchdowns of a foot ahead of the other foot, before the
                 first fall, while facing within ``max_yaw`` of the start
-                heading
+                heading; with ``alternate`` (bob_walk-v3) only when the
+                feet take turns
 """
 from __future__ import annotations
 
@@ -96,11 +97,18 @@ def feet_forward(feet_xy, yaw0) -> np.ndarray:
 
 
 def count_steps(foot_force, foot_fwd, fell, yaw, max_yaw=np.radians(45.0),
-                ahead=0.05) -> np.ndarray:
+                ahead=0.05, alternate=False) -> np.ndarray:
     """Steps [...]: touchdowns (normal force 0 → > 0) of one of two feet
     landing at least ``ahead`` m in front of the other foot (forward = the
     start heading; ``foot_fwd`` [..., F, 2]), before the first fall and
-    while the heading is within ``max_yaw`` of the start (forward-facing)."""
+    while the heading is within ``max_yaw`` of the start (forward-facing).
+
+    ``alternate``: a touchdown counts only if the previous counted step was
+    the other foot's (the first counted step may be either foot's), so the
+    feet must pass each other: a leading foot that bounces or chatters in
+    place, or steps again and again while the other foot drags behind, is
+    one step, not many.  (Without it, bob_walk-v1/v2's count, every such
+    touchdown counts.)"""
     force = np.asarray(foot_force, np.float64)
     fwd = np.asarray(foot_fwd, np.float64)
     down = force > 0
@@ -108,4 +116,21 @@ def count_steps(foot_force, foot_fwd, fell, yaw, max_yaw=np.radians(45.0),
     lead = fwd[..., 1:, :] - fwd[..., 1:, ::-1] >= ahead
     yaw = np.asarray(yaw, np.float64)
     ok = ~np.asarray(fell)[..., 1:] & (np.abs(yaw[..., 1:] - yaw[..., :1]) <= max_yaw)
-    return (touch & lead & ok[..., None]).sum(axis=(-2, -1))
+    step = touch & lead & ok[..., None]                              # [..., F-1, 2]
+    if not alternate:
+        return step.sum(axis=(-2, -1))
+    return _alternating(step.reshape(-1, *step.shape[-2:])).reshape(step.shape[:-2])
+
+
+def _alternating(step) -> np.ndarray:
+    """Counted steps [E] of candidate touchdowns [E, F, 2] taken only when the
+    foot differs from the last counted one's (with ``ahead`` > 0 the two
+    feet never qualify in the same frame)."""
+    n = np.zeros(step.shape[0], np.int64)
+    last = np.full(step.shape[0], -1)
+    for f in range(step.shape[1]):
+        for k in (0, 1):
+            take = step[:, f, k] & (last != k)
+            n += take
+            last = np.where(take, k, last)
+    return n
