@@ -10,6 +10,9 @@ distance at the end plus half its mean over the last 0.5 s (arrive, then
 stay); success also needs the motion at rest (``_herman.at_rest``).  Style
 points as every Herman arm task.
 """
+from dataclasses import replace
+from typing import ClassVar
+
 import numpy as np
 
 from gpmotion.sim import geometry3d
@@ -26,14 +29,11 @@ PRESETS = (            # pelvis frame (m)
     (0.35, 0.10, 0.65),    # 2: high, in front of the face and across to the left
 )
 
-# A preset's own weight of the limits term (the others: 0).  Target 1's runs
-# that miss end 11-14 cm short on a pose with 4 of the arm's 6 joints on their
-# limits (a constant tree drives a rate target to its limit: the easy
-# near-solution there); charged for it, 3 / 5 seeds solve (2 / 5 without) and
-# the two misses touch the object but still move.  Targets 0 and 2 solve on
-# poses with joints on their limits, and charged the same they solved 2 / 3 and
-# 0 / 3 (session 13, docs/notes/herman.md).
-PRESET_LIMITS = {1: 2.0}
+
+
+def _rest_scaled(terms):
+    """The style terms with the rest term's weight scaled by the task parameter w_rest."""
+    return tuple(replace(t, param="w_rest") if t.name == "rest" else t for t in terms)
 
 
 def _preset(target) -> int | None:
@@ -48,7 +48,7 @@ class HermanTouchObject(HermanTask):
     name = "herman_touch_object"
     description = "Herman touches an object with the right fingertip"
     params = {"target": -1.0, "x": PRESETS[0][0], "y": PRESETS[0][1], "z": PRESETS[0][2],
-              "seconds": 1.5, "w_limits": 0.0}
+              "seconds": 1.5, "w_limits": 0.0, "w_rest": 1.0}
     bounds = {"target": (-1, 2)}
     # The trees drive their joints' target *rates* (gpmotion.gp.bytecode.TargetLaw):
     # a tree of the fingertip's error then settles on the object, where an angle
@@ -59,18 +59,21 @@ class HermanTouchObject(HermanTask):
     # session 12, 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
     # 20 of 50: 3, 3, 4; target 1 with the limits term, session 13: 3); docs/notes/herman.md.
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
+    preset_weights: ClassVar[dict] = {}      # preset -> its own default term weights (v2)
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
                   "x": "object forward of the pelvis (m)", "y": "object left of the pelvis (m)",
                   "z": "object above the pelvis (m)", "seconds": "episode length (s)",
                   "w_limits": "weight of the limits term (per unit: 1 = a 10 cm miss; "
-                              "default 0, target 1: 2)"}
+                              "default 0; v2 target 1: 2)",
+                  "w_rest": "multiplier on the rest term's weight (1: as every arm task; "
+                            "v2 target 1: 3)"}
     goal_label = "object"          # pictures: the scene goal, captioned
     terms = (Term("object", MAIN_WEIGHT, main=True,
                   doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              Term("limits", 0.1 * MAIN_WEIGHT, param="w_limits",
                   doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s"),
-             *style_terms())
+             *_rest_scaled(style_terms()))
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
     def validate(self):
@@ -87,8 +90,7 @@ class HermanTouchObject(HermanTask):
 
     def __init__(self, **overrides):
         preset = _preset(overrides.get("target", type(self).params["target"]))
-        if preset in PRESET_LIMITS and "w_limits" not in overrides:
-            overrides["w_limits"] = PRESET_LIMITS[preset]
+        overrides = {**type(self).preset_weights.get(preset, {}), **overrides}
         super().__init__(**overrides)
         f = self.figure
         shoulder = geometry3d.sites_world(f, f.q_default)[f.site_names.index("shoulder_r")]
@@ -118,3 +120,18 @@ class HermanTouchObject(HermanTask):
         return [f"object at ({rel[0]:.2f}, {rel[1]:.2f}, {rel[2]:.2f}) m from the pelvis: "
                 f"fingertip {d[-1] * 100:.1f} cm away at the end; first touch {first}",
                 f"fingertip speed over the last 0.1 s ≤ {m['end_speed'][0] * 100:.1f} cm/s"]
+
+
+@register_task
+class HermanTouchObjectV2(HermanTouchObject):
+    """v2: target 1 (low, beside the right hip) charges two things by default.
+    Its misses under v1 (session 12, 5 seeds: 2 / 5) ended 11-14 cm short on a
+    pose with 4 of the arm's 6 joints on their limits (a constant tree drives a
+    rate target to its limit: the easy near-solution there): the limits term at
+    weight 2 turned them into touches (3 / 5), but two of those still moved
+    faster than the rest rule allows (5.4 and 13.4 cm/s).  The rest term three
+    times as heavy settles them: 4 / 5 (session 14).  Targets 0 and 2 solve on
+    poses with joints on their limits, so they keep v1's weights (charged the
+    same they solved 2 / 3 and 0 / 3, session 13); docs/notes/herman.md."""
+    version = 2
+    preset_weights = {1: {"w_limits": 2.0, "w_rest": 3.0}}

@@ -297,11 +297,20 @@ def test_the_limits_term_counts_the_arm_joints_resting_on_a_limit(herman):
     task = get_task("herman_touch_object", target=1, w_limits=2.0)
     assert {t.name: t.weight for t in task.terms}["limits"] == pytest.approx(2.0)
     assert task.measure(_still(herman, q))["limits"][0] == pytest.approx(2 / 6)
-    # target 1 charges it by default (its misses rest on the limits), the others do not
-    weight = {t: {x.name: x.weight for x in get_task("herman_touch_object", target=t).terms}["limits"]
-              for t in (-1, 0, 1, 2)}
-    assert weight == {-1: 0.0, 0: 0.0, 1: pytest.approx(2.0), 2: 0.0}
+    # v2's target 1 charges it by default (its misses rest on the limits) and
+    # triples the rest term; the other presets, and every preset of v1, do not
+    def weights(tid, t):
+        return {x.name: x.weight for x in get_task(tid, target=t).terms}
+
+    for t in (-1, 0, 1, 2):
+        assert weights("herman_touch_object-v1", t)["limits"] == 0.0
+        assert weights("herman_touch_object-v1", t)["rest"] == pytest.approx(3.0)
+    v2 = {t: (weights("herman_touch_object", t)["limits"], weights("herman_touch_object", t)["rest"])
+          for t in (-1, 0, 1, 2)}
+    assert v2 == {-1: (0.0, 3.0), 0: (0.0, 3.0), 1: (pytest.approx(2.0), pytest.approx(9.0)), 2: (0.0, 3.0)}
     assert get_task("herman_touch_object", target=1, w_limits=0).params["w_limits"] == 0.0
+    assert get_task("herman_touch_object", target=1, w_rest=1).params == {
+        **get_task("herman_touch_object", target=1).params, "w_rest": 1.0}
 
 
 # ---------------------------------------------------------------- success at rest
