@@ -282,3 +282,113 @@ def test_fresh_scores_resume_exactly_and_are_in_the_checkpoint():
     assert resumed.best_cost == full.best_cost and resumed.final.round == full.final.round
     with pytest.raises(ValueError, match="fresh_scores"):
         make(0, fresh_scores="yes")
+
+
+# -- restarts (restart_after / restart_delta) ----------------------------------------
+
+def _fresh_marker_search(**kw):
+    """Marker genomes that say whether they are fresh (random) or mutants."""
+    counter = iter(range(10_000))
+    fam = ToyFamily(lambda rng: {"id": next(counter), "fresh": True},
+                    lambda g, rng, extra: {"id": next(counter), "fresh": False},
+                    to_json=dict, from_json=dict)
+    return SerialSearch(fam, seed=0, **kw)
+
+
+def test_restart_replaces_a_stagnant_working_set_and_keeps_the_best():
+    s = _fresh_marker_search(n_working=2, n_generations=20, reseed_every=100, restart_after=3)
+    s.ask(); s.tell([-1.0, -2.0])                    # initial: mark (0, best -2)
+    for _ in range(3):                               # three rounds, no improvement
+        assert not any(g["fresh"] for g in s.ask())
+        s.tell([0.0, 0.0])
+    assert s.generation == 3 and s.restarts == 0
+    cands = s.ask()                                  # round 4 is the restart
+    assert [g["fresh"] for g in cands] == [True, True] and s.restarting
+    s.tell([5.0, 4.0])                               # worse than before: replaces anyway
+    assert [g["id"] for g in s.working] == [g["id"] for g in cands]
+    assert list(s.scores) == [5.0, 4.0] and s.restarts == 1 and s.generation == 4
+    assert s.evaluations == 2 * 5 and s.best_score == -2.0     # best-so-far survives
+    assert not any(g["fresh"] for g in s.ask())      # mutants of the new set next
+
+
+def test_strict_improvement_puts_off_a_restart_and_delta_sets_its_size():
+    for delta, restarted in [(0.0, False), (0.5, True)]:
+        s = _fresh_marker_search(n_working=1, n_generations=20, reseed_every=100,
+                                 restart_after=2, restart_delta=delta)
+        s.ask(); s.tell([0.0])
+        for cost in (-0.1, -0.2):                    # small steps, each an improvement
+            s.ask(); s.tell([cost])
+        assert s.ask()[0]["fresh"] is restarted, delta
+        assert s.restarting is restarted
+
+
+def test_restarts_are_off_by_default_and_leave_the_checkpoint_as_before():
+    a, b = run(make(3)), run(make(3, restart_after=0))
+    assert a.history == b.history and a.restarts == 0
+    st = a.state_dict()
+    assert "restart" not in st and "restart_after" not in st["config"]
+    on = run(make(3, restart_after=5))
+    assert on.state_dict()["config"]["restart_after"] == 5 and "restart" in on.state_dict()
+
+
+def test_restarts_happen_on_the_toy_and_are_deterministic_per_seed():
+    a, b, c = (run(make(seed, restart_after=4, restart_delta=0.05)) for seed in (8, 8, 9))
+    assert a.restarts > 0
+    assert a.history == b.history and a.best_genome.to_dict() == b.best_genome.to_dict()
+    assert a.history != c.history
+    assert a.evaluations == 6 * 121                  # a restart round costs C, like any round
+    best = [x for _, x in a.history]
+    assert all(y <= x for x, y in zip(best, best[1:]))
+
+
+@pytest.mark.parametrize("stop_between_ask_and_tell", [False, True])
+def test_restarts_resume_identically(stop_between_ask_and_tell):
+    kw = dict(restart_after=4, restart_delta=0.05)
+    full = run(make(8, **kw))
+    assert full.restarts > 0
+    for until in range(1, 120, 7):                  # stops before, in and after restarts
+        part = run(make(8, **kw), until=until)
+        resumed = restored(part, make(999, n_generations=1), stop_between_ask_and_tell)
+        assert resumed.restart_after == 4 and resumed.restart_delta == 0.05
+        run(resumed)
+        assert resumed.history == full.history and resumed.restarts == full.restarts
+        assert resumed.best_genome.to_dict() == full.best_genome.to_dict()
+
+
+def test_a_phase_rescore_comes_first_and_restarts_the_count():
+    """A phase change re-scores before any restart; the re-scored set counts from there."""
+    s = make_phased(1, restart_after=1)
+    s.ask(); s.tell([phased_cost(g, s.current_phase()) for g in s.pending])
+    while not s.done:
+        cands = s.ask()
+        if s.rescoring:
+            assert len(cands) == 7 and not s.restarting
+            s.tell([phased_cost(g, s.current_phase()) for g in cands])
+            assert s.mark == (s.generation, s._working_best())
+        else:
+            s.tell([phased_cost(g, s.current_phase()) for g in cands])
+    assert s.restarts > 0
+
+
+@pytest.mark.parametrize("kw, needle", [
+    (dict(restart_after=-1), "restart_after"), (dict(restart_after=1.5), "restart_after"),
+    (dict(restart_after=2, restart_delta=-0.1), "restart_delta"),
+    (dict(restart_after=2, restart_delta=float("nan")), "restart_delta"),
+    (dict(restart_delta=0.1), "needs restart_after")])
+def test_restart_settings_are_checked(kw, needle):
+    with pytest.raises(ValueError, match=needle):
+        make(0, **kw)
+
+
+def test_restart_options_reach_the_serial_search():
+    from gpmotion.cli import _run_configs, parser
+    args = parser().parse_args(["run", "starman_travel", "--controller", "bsr-time",
+                                "--restart-after", "30", "--restart-delta", "0.01",
+                                "--generations", "7"])
+    (cfg, _), = list(_run_configs(args))
+    assert cfg.search == {"restart_after": 30, "restart_delta": 0.01, "n_generations": 7}
+    from gpmotion.families import make_family
+    from gpmotion.task import get_task
+    fam = make_family("bsr-time", get_task("starman_travel"))
+    s = fam.make_search(0, **cfg.search)
+    assert (s.restart_after, s.restart_delta, s.n_generations) == (30, 0.01, 7)

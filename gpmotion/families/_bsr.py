@@ -22,6 +22,16 @@ for _option in (
                "serial search: reseeding interval in rounds (default 200)",
                "the serial search's reseeding interval", dict(type=int),
                number(1, 10_000_000, True)),
+        Option("--restart-after", "search", {},
+               "serial search: restart the whole working set from fresh random controllers "
+               "when its best has not improved (by more than --restart-delta) for N rounds "
+               "(default 0: never)",
+               "the serial search's restart interval", dict(type=int),
+               number(0, 10_000_000, True)),
+        Option("--restart-delta", "search", {},
+               "serial search: an improvement of the working set's best smaller than this "
+               "does not put off a restart (cost units; default 0)",
+               "the serial search's restart threshold", dict(type=float), number(0.0, 1e300)),
         Option("--rules", "family", {}, "BSR rules per controller (default sense 8, time 4)",
                "the number of BSR rules (a GP controller is one tree per joint)", dict(type=int),
                number(1, 10_000, True))):
@@ -34,7 +44,8 @@ class BSRFamily(Family):
     kind = ""
     search_class = SerialSearch
     cli = {"--generations": "n_generations", "--working": "n_working",
-           "--reseed-every": "reseed_every", "--rules": "rules"}
+           "--reseed-every": "reseed_every", "--restart-after": "restart_after",
+           "--restart-delta": "restart_delta", "--rules": "rules"}
 
     # Table 2's τ range is [2Δt, T/4]; Δt here is the controller tick.  At
     # 50 ms, τ ≥ 0.1 s: kinematic joints have unlimited torque, and the paper

@@ -44,6 +44,17 @@ Decisions, all stated once here:
   parent's luckiest earlier ones.  A round then costs 2C + 1 evaluations,
   and the best under the final weights is the latest round's best (the
   incumbent re-scored, or a controller that beat it on the same starts).
+* restarts (``restart_after`` = N > 0; 0, the default, never restarts):
+  when the working set's best cost has not improved by more than
+  ``restart_delta`` for N rounds (counted from the round it last did, or
+  from the last restart or re-score), the next round hands out C fresh
+  random controllers instead of mutants and they replace the whole working
+  set (scores and extras too).  A restart round costs C evaluations and
+  counts as a round like any other, so a budget of rounds buys the same
+  evaluations with or without restarts; the best-so-far is kept across
+  restarts (a restart only ever loses the working set).  Fresh controllers
+  come from the family's ``random``, as the first ones do (an enriched
+  start is not repeated).
 ``state_dict()`` is JSON-safe (rng state from ``rng.bit_generator.state``),
 so a run resumes bit-for-bit from a checkpoint taken between any two calls.
 """
@@ -115,7 +126,8 @@ class SerialSearch(Search):
     def __init__(self, family, seed: int | None = None, n_working: int = 10,
                  n_generations: int = 4000, reseed_every: int = 200,
                  accept_ties: bool = False, phase_steps: int = PHASE_STEPS,
-                 fresh_scores: bool = False, task=None, rng=None):
+                 fresh_scores: bool = False, restart_after: int = 0,
+                 restart_delta: float = 0.0, task=None, rng=None):
         super().__init__(family, task)
         if rng is None and seed is None:
             raise ValueError("SerialSearch needs a seed (randomness is explicit)")
@@ -133,6 +145,18 @@ class SerialSearch(Search):
         if not isinstance(fresh_scores, (bool, np.bool_)):
             raise ValueError(f"fresh_scores must be true or false, got {fresh_scores!r}")
         self._set_fresh_scores(fresh_scores)         # no best picked by the luck of its starts
+        if isinstance(restart_after, bool) or not isinstance(restart_after, (int, np.integer)) \
+                or restart_after < 0:
+            raise ValueError(f"restart_after must be an integer >= 0 (0: never), got {restart_after!r}")
+        if isinstance(restart_delta, bool) or not isinstance(restart_delta, (int, float, np.floating)) \
+                or not math.isfinite(restart_delta) or restart_delta < 0:
+            raise ValueError(f"restart_delta must be a finite number >= 0, got {restart_delta!r}")
+        if restart_delta and not restart_after:
+            raise ValueError("restart_delta needs restart_after > 0 (without it nothing restarts)")
+        self.restart_after, self.restart_delta = int(restart_after), float(restart_delta)
+        self.restarting = False        # pending = fresh random controllers (a restart)
+        self.restarts = 0              # restarts so far
+        self.mark = None               # (round, working-set best) of the last improvement
         self.phase = None              # phase the working scores and best_score are of
         self.rescoring = False         # pending = working set + best, to re-score
         self.generation = 0            # completed mutation rounds
@@ -186,6 +210,9 @@ class SerialSearch(Search):
             elif self._stale():
                 self.pending = [copy(g) for g in self.working] + [copy(self.best_genome)]
                 self.rescoring = True
+            elif self._restart_due():
+                self.pending = [self.family.random(self.rng) for _ in range(self.n_working)]
+                self.restarting = True
             else:
                 self.pending = [self.family.mutate(g, self.rng, e)
                                 for g, e in zip(self.working, self.extras)]
@@ -197,6 +224,25 @@ class SerialSearch(Search):
 
     def _stale(self) -> bool:
         return self.current_phase() != self.phase
+
+    # -- restarts ---------------------------------------------------------------
+    def _working_best(self) -> float:
+        return max(self._key(c) for c in self.scores)       # larger is better
+
+    def _set_mark(self) -> None:
+        self.mark = (self.generation, self._working_best())
+
+    def _update_mark(self) -> None:
+        """Move the mark when the working set's best improved by more than
+        restart_delta since it was set (only with restarts on)."""
+        if not self.restart_after:
+            return
+        if self.mark is None or self._working_best() > self.mark[1] + self.restart_delta:
+            self._set_mark()
+
+    def _restart_due(self) -> bool:
+        return bool(self.restart_after) and self.mark is not None \
+            and self.generation - self.mark[0] >= self.restart_after
 
     def _told(self, ev) -> tuple[np.ndarray, list]:
         """The costs and extras of the last ask's candidates, checked."""
@@ -225,6 +271,11 @@ class SerialSearch(Search):
         if self.working is None:
             self.working, self.scores, self.extras = list(self.pending), scores, extras
             self.phase = self.current_phase()
+        elif self.restarting:
+            self.working, self.scores, self.extras = list(self.pending), scores, extras
+            self.generation += 1
+            self.restarting, self.mark = False, None
+            self.restarts += 1
         else:
             for i in range(n):
                 if self._better(scores[i], self.scores[i], self.accept_ties):
@@ -236,6 +287,7 @@ class SerialSearch(Search):
         self._keep_best(self.working, self.scores)
         if self.generation > 0 and self.generation % self.reseed_every == 0:
             self._reseed()
+        self._update_mark()
         self.history.append((self.evaluations, self.best_score))
 
     def _tell_rescored(self, scores, extras) -> None:
@@ -245,6 +297,8 @@ class SerialSearch(Search):
         self.best_score = float(scores[c])
         self._keep_best(self.working, self.scores)
         self.phase, self.rescoring, self.pending = self.current_phase(), False, None
+        if self.restart_after:
+            self._set_mark()                 # scores of a new phase: count from here
         self.evaluations += c + 1
         self.history.append((self.evaluations, self.best_score))
 
@@ -283,7 +337,9 @@ class SerialSearch(Search):
         return {"n_working": self.n_working, "n_generations": self.n_generations,
                 "reseed_every": self.reseed_every, "maximize": False,
                 "accept_ties": self.accept_ties,
-                **({"fresh_scores": True} if self.fresh_scores else {})}   # absent: as before
+                **({"fresh_scores": True} if self.fresh_scores else {}),   # absent: as before
+                **({"restart_after": self.restart_after, "restart_delta": self.restart_delta}
+                   if self.restart_after else {})}
 
     # -- checkpoints ---------------------------------------------------------
     def _state(self) -> dict:
@@ -303,6 +359,10 @@ class SerialSearch(Search):
             "best_genome": None if self.best_genome is None else enc(self.best_genome),
             "best_score": _score_to_json(self.best_score),
             "history": [[int(e), _score_to_json(b)] for e, b in self.history],
+            **({"restart": {"restarting": self.restarting, "restarts": self.restarts,
+                            "mark": None if self.mark is None
+                            else [self.mark[0], _score_to_json(-self.mark[1])]}}
+               if self.restart_after else {}),           # absent without restarts: as before
         }
 
     def _load(self, state: dict) -> None:
@@ -322,6 +382,12 @@ class SerialSearch(Search):
         self.reseed_every = int(cfg["reseed_every"])
         self.accept_ties = bool(cfg["accept_ties"])
         self._set_fresh_scores(cfg.get("fresh_scores", False))   # absent before robust re-scores
+        self.restart_after = int(cfg.get("restart_after", 0))
+        self.restart_delta = float(cfg.get("restart_delta", 0.0))
+        rs = state.get("restart") or {}
+        self.restarting, self.restarts = bool(rs.get("restarting", False)), int(rs.get("restarts", 0))
+        mark = rs.get("mark")
+        self.mark = None if mark is None else (int(mark[0]), self._key(num(mark[1])))
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.rng.bit_generator.state = state["rng"]
         opt = lambda xs, f: None if xs is None else [f(x) for x in xs]  # noqa: E731
