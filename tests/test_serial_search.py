@@ -392,3 +392,23 @@ def test_restart_options_reach_the_serial_search():
     fam = make_family("bsr-time", get_task("starman_travel"))
     s = fam.make_search(0, **cfg.search)
     assert (s.restart_after, s.restart_delta, s.n_generations) == (30, 0.01, 7)
+
+
+@pytest.mark.slow
+def test_a_run_with_restarts_resumes_to_the_uninterrupted_run(tmp_path):
+    """Through the CLI on a tiny Rex walk: restarts happen, and 6 + 6 rounds
+    (run, then resume --extend-generations) log what 12 rounds do."""
+    import csv
+    from gpmotion.cli import main
+    args = ["rex_walk", "--controller", "bsr-time", "--segments", "variable", "--t-per", "0.2",
+            "--param", "seconds=0.2", "--param", "hold=0.1", "--working", "4", "--quiet",
+            "--no-artifacts", "--restart-after", "2", "--threads", "1"]
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert main(["run", *args, "--generations", "12", "--out", str(a)]) == 0
+    assert main(["run", *args, "--generations", "6", "--out", str(b)]) == 0
+    assert main(["resume", str(b), "--extend-generations", "6", "--quiet"]) == 0
+    keep = ("generation", "evaluations", "best_so_far", "gen_min", "gen_median", "gen_max")
+    rows = [[{k: r[k] for k in keep} for r in csv.DictReader(open(d / "log.csv"))] for d in (a, b)]
+    assert rows[0] == rows[1] and len(rows[0]) == 13
+    state = json.loads((a / "checkpoint.json").read_text())["search"]
+    assert state["config"]["restart_after"] == 2 and state["restart"]["restarts"] > 0
