@@ -79,6 +79,27 @@ CONFIGS = {
                        {"t_per": 0.5, "bsr_dt": 0.1},
                        ("periodic shuffle",),
                        "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    # shorter periods (Fig. 12's t_per << T; the paper gives no value): at 0.5 s
+    # 2 / 5 shuffle periodically and the misses hop or tip forward
+    "beryl-periodic-t03": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                           {"t_per": 0.3, "bsr_dt": 0.1}, ("periodic shuffle",),
+                           "Beryl time-based, t_per = 0.3 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic-t02": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                           {"t_per": 0.2, "bsr_dt": 0.1}, ("periodic shuffle",),
+                           "Beryl time-based, t_per = 0.2 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic-t075": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                            {"t_per": 0.75, "bsr_dt": 0.1}, ("periodic shuffle",),
+                            "Beryl time-based, t_per = 0.75 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic-t1": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                          {"t_per": 1.0, "bsr_dt": 0.1}, ("periodic shuffle",),
+                          "Beryl time-based, t_per = 1 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    # slower responses (a higher τ floor) make a hop's push-off harder
+    "beryl-periodic-tau03": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                             {"t_per": 0.5, "bsr_dt": 0.15}, ("periodic shuffle",),
+                             "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.3 s"),
+    "beryl-periodic-tau04": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
+                             {"t_per": 0.5, "bsr_dt": 0.2}, ("periodic shuffle",),
+                             "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.4 s"),
     # contact_distance weighted 4: at 2 and 40,000 evaluations a 6.5 m hop
     # (cost -12.1) beat a 2.4 m periodic shuffle (-11.3) on Beryl, and
     # Star-Man's best were shuffles with one 40-80 ms flight
@@ -99,6 +120,20 @@ CONFIGS = {
                              {"w_grounded_distance": 2.0, "figure": "noslip:starman"}, {},
                              ("shuffle", "periodic shuffle"),
                              "Star-Man time-based + grounded_distance (w 2), no-slip ground (μ = 5)"),
+    # the paper's friction model (§2.1): a lone touching point is pinned, several
+    # share one horizontal force by load, so each may slide relative to the others
+    "star-time-shared": ("starman_travel", "bsr-time", {"figure": "shared:starman"}, {},
+                         ("shuffle", "periodic shuffle"),
+                         "Star-Man time-based, unguided, the paper's friction"),
+    "star-contact-shared": ("starman_travel", "bsr-time",
+                            {"w_contact_distance": 2.0, "figure": "shared:starman"}, {},
+                            ("shuffle", "periodic shuffle"),
+                            "Star-Man time-based + contact_distance (w 2), the paper's friction"),
+    "beryl-periodic-shared": ("beryl_travel", "bsr-time",
+                              {"w_contact_distance": 2.0, "figure": "shared:beryl"},
+                              {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                              "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s, "
+                              "the paper's friction"),
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
     "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},
@@ -123,6 +158,9 @@ def _fail(msg: str) -> None:
 
 
 NOSLIP_MU = 5.0
+# figure = "VARIANT:NAME": figure NAME on another ground
+GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU},
+                   "shared": {"friction": "shared"}}   # Auslander et al.'s friction (§2.1)
 
 
 def _resolved(params: dict) -> dict:
@@ -131,11 +169,11 @@ def _resolved(params: dict) -> dict:
     ``gpmotion run --figure`` stores a variant)."""
     out = dict(params)
     fig = out.get("figure")
-    if isinstance(fig, str) and fig.startswith("noslip:"):
+    if isinstance(fig, str) and ":" in fig:
         from gpmotion.figures import resolve_spec
-        base = fig.split(":", 1)[1]
-        out["figure"] = resolve_spec({"extends": base, "name": f"{base}_noslip",
-                                      "ground": {"mu": NOSLIP_MU}})
+        variant, base = fig.split(":", 1)
+        out["figure"] = resolve_spec({"extends": base, "name": f"{base}_{variant}",
+                                      "ground": GROUND_VARIANTS[variant]})
     return out
 
 

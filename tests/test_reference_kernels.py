@@ -159,6 +159,29 @@ def test_ground_contacts_match_reference(name, M):
 
 
 @pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
+def test_shared_friction_contacts_match_reference(name, M):
+    rng = np.random.default_rng(14)
+    scene = gpmotion.make_scene(friction="shared", k_tangent=4000.0)
+    n, nc = len(M.parent), len(M.cp_link)
+    shared = 0
+    for _ in range(40):
+        q, qd = random_state(M, rng)
+        pose, X, v, cbias, cs = run_kinematics(M, q, qd)
+        heights = [planar.point_world(pose, cs, l, *p)[1] if l >= 0 else
+                   planar.fixed_point_world(*M.fixed_pose, *p)[1] for l, p in zip(M.cp_link, M.cp_pos)]
+        sc = scene._replace(ground_z=float(rng.choice(heights) + rng.uniform(-0.02, 0.05)))
+        anchor = rng.uniform(-1, 1, nc)
+        touching = (rng.random(nc) < 0.5).astype(float)
+        fext, cforce = np.zeros((n, 3)), np.zeros(nc)
+        a_k, t_k = anchor.copy(), touching.copy()
+        planar.ground_contacts(M, sc, pose, cs, v, a_k, t_k, fext, cforce)
+        rf, rc, ra, rt = ref.ground_contacts(M, sc, q, qd, anchor, touching)
+        assert close(fext, rf) and close(cforce, rc) and close(a_k, ra) and np.array_equal(t_k, rt)
+        shared += int((rc > 0).sum() >= 2)
+    assert shared > 5                       # several points sharing one force were exercised
+
+
+@pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
 def test_mechanical_energy_matches_reference(name, M):
     rng = np.random.default_rng(13)
     scene = gpmotion.make_scene()
