@@ -32,6 +32,10 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
                   contact_distance: the paper's term read for pinned contacts
   star-contact-noslip, star-grounded-noslip  Star-Man's shuffle configurations on a
                   no-slip ground (friction 5: the paper's pinned contacts, approximated)
+  star-time-shared, star-contact-shared, beryl-periodic-shared  on the paper's
+                  friction (a lone touching point pinned, several sharing one force by load)
+  beryl-periodic-t02, -t03, -t075, -t1, -tau03, -tau04  Beryl's periodic shuffle
+                  at other periods t_per and τ floors
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
 Runs are queued seed-major (every configuration's seed 0 first), so a study
