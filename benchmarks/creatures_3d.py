@@ -6,6 +6,7 @@
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
     python benchmarks/creatures_3d.py mujoco [--quick]
     python benchmarks/creatures_3d.py curves LABEL=RUN_DIR ... [--out PNG]
+    python benchmarks/creatures_3d.py steps RUN_DIR ... [--task bob_walk-v3] [--touchdowns]
 
 * ``rates``: ``gpmotion compare`` on a creature task with the families'
   creature settings (``FAMILY_OPTIONS``: time-based BSR with the paper's
@@ -23,6 +24,11 @@
 * ``speed``: one time-based Rex walk search until its first acceptable
   controller (``rex_walk`` solved: its success threshold); wall and CPU
   seconds and evaluations.
+* ``steps``: Bob's saved controllers replayed under one ``bob_walk``
+  version (default the newest): per run, the evaluations the search spent,
+  alternating steps (v3's count), touchdowns ahead (v1/v2's count),
+  distance, facing, fallen, solved; ``--touchdowns`` lists every touchdown
+  (time, foot, how far ahead of the other foot, heading).
 * ``mujoco``: the 3-D kernel against MuJoCo's C rollout on each creature
   (``benchmarks/compare_mujoco.py --only creatures``).
 """
@@ -178,6 +184,43 @@ def curves(a) -> int:
     return 0
 
 
+def steps(a) -> int:
+    import csv
+
+    import gpmotion
+    from gpmotion.bsr import secondary3d as s3
+    from gpmotion.families import make_family
+    from gpmotion.replay import load_controller, replay_genome
+    task = gpmotion.get_task(a.task)
+    print("| run | recorded task | evaluations | steps | touchdowns ahead | forward m | facing ° | "
+          "fallen % | solved |\n|---|---|---|---|---|---|---|---|---|")
+    for run in a.runs:
+        rec_task, fam, act, genome, _ = load_controller(run)
+        traj, _, m, ok = replay_genome(task, make_family(fam.name, task, **fam.options), act, genome)
+        evals = ""
+        log = Path(run) / "log.csv"
+        if log.exists():
+            evals = list(csv.DictReader(open(log)))[-1]["evaluations"]
+        touch = m.get("touchdowns", m["steps"])
+        print(f"| {run} | {rec_task.id} | {evals} | {int(m['steps'][0])} | {int(touch[0])} | "
+              f"{m['distance'][0]:.2f} | {np.degrees(m['facing'][0]):.0f} | {100 * m['fall'][0]:.0f} | "
+              f"{'yes' if ok[0] else 'no'} |")
+        if a.touchdowns:
+            fig = traj.figure
+            xy = traj.sites()[0][:, [fig.site_names.index(n) for n in task.foot_sites], :2]
+            yaw = s3.heading(traj.base()[0][..., 3:7])
+            fwd = np.stack([s3.in_start_frame(xy[:, k, :], yaw[0])[..., 0] for k in range(2)], -1)
+            force = np.stack([traj.contact_force[0][:, [fig.contact_names.index(n) for n in g]].sum(-1)
+                              for g in task.foot_groups], -1)
+            down = force > 0
+            dt = task.dt * task.record_every
+            for f in np.flatnonzero((down[1:] & ~down[:-1]).any(-1)) + 1:
+                for k in np.flatnonzero(down[f] & ~down[f - 1]):
+                    print(f"    t {f * dt:.2f} s  foot {k}  lands {fwd[f, k] - fwd[f, 1 - k]:+.3f} m "
+                          f"ahead of the other  heading {np.degrees(yaw[f] - yaw[0]):+.0f}°")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -203,9 +246,13 @@ def main(argv=None) -> int:
     c.add_argument("runs", nargs="+", help="LABEL=RUN_DIR (a gpmotion run directory)")
     c.add_argument("--title", default="")
     c.add_argument("--out", default="curves.png")
+    t = sub.add_parser("steps")
+    t.add_argument("runs", nargs="+", help="gpmotion run directories (or best.json files) of Bob")
+    t.add_argument("--task", default="bob_walk", help="the bob_walk version to replay under")
+    t.add_argument("--touchdowns", action="store_true", help="list every touchdown")
     a = p.parse_args(argv)
     return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
-            "curves": curves}[a.cmd](a)
+            "curves": curves, "steps": steps}[a.cmd](a)
 
 
 if __name__ == "__main__":
