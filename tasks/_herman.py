@@ -16,6 +16,8 @@ This module starts with ``_``: the plugin loader does not import it as a task.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.task import Task, Term
@@ -124,6 +126,12 @@ def style_terms(rest: bool = True, scale: float = MAIN_WEIGHT,
                           phase=(0.2, 0.6),
                           doc=f"mean fingertip speed over the last {REST_WINDOW} s (m/s)"))
     return tuple(terms)
+
+
+def rest_scaled(terms) -> tuple[Term, ...]:
+    """The style terms with the rest term's weight scaled by the task parameter
+    ``w_rest`` (a task using this declares it)."""
+    return tuple(replace(t, param="w_rest") if t.name == "rest" else t for t in terms)
 
 
 def _segment(fig, body):

@@ -21,8 +21,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (ARM, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
-                                    site_at_rest, style_measures, style_terms, tail)
+from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
+                                    rest_scaled, site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
 HOLD = 0.5              # s: the window of the averaged distance
@@ -144,3 +144,22 @@ class HermanTouch(HermanTask):
         return [f"fingertip–{self.site} {d[-1] * 100:.1f} cm at the end; first touch {first}",
                 f"held joints off neutral by {np.degrees(m['posture'][0]):.1f}° RMS; "
                 f"fingertip speed over the last 0.1 s ≤ {m['end_speed'][0] * 100:.1f} cm/s"]
+
+
+@register_task
+class HermanTouchV2(HermanTouch):
+    """v2: the recipe that settles ``herman_touch_object`` on sites other than
+    the nose.  Under v1 (angle targets, no polish) the sites off the right
+    arm's plane failed by not coming to rest (session 14, 4 runs: knee_l 4.0
+    and 0.9 cm away moving 19 and 30 cm/s; elbow_l 12.8 and 7.0 cm moving 42
+    and 62 cm/s).  v2's trees drive target rates (feedback on the error
+    integrates to rest), the last 10 of the 50 generations polish the best,
+    and the rest term weighs three times as much (``w_rest``, as
+    ``herman_touch_object-v2``'s target 1); docs/notes/herman.md."""
+    version = 2
+    params = {**HermanTouch.params, "w_rest": 3.0}
+    param_docs = {**HermanTouch.param_docs,
+                  "w_rest": "multiplier on the rest term's weight (1: as every arm task)"}
+    terms = rest_scaled(HermanTouch.terms)
+    gp_targets = "rate"
+    gp_defaults = {**GP_DEFAULTS, "polish": 10}

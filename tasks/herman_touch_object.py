@@ -10,7 +10,6 @@ distance at the end plus half its mean over the last 0.5 s (arrive, then
 stay); success also needs the motion at rest (``_herman.at_rest``).  Style
 points as every Herman arm task.
 """
-from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -18,7 +17,7 @@ import numpy as np
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, on_limits,
-                                    style_measures, style_terms, tail)
+                                    rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
 HOLD = 0.5             # s: the window of the averaged distance (arrive, then stay)
@@ -29,11 +28,6 @@ PRESETS = (            # pelvis frame (m)
     (0.35, 0.10, 0.65),    # 2: high, in front of the face and across to the left
 )
 
-
-
-def _rest_scaled(terms):
-    """The style terms with the rest term's weight scaled by the task parameter w_rest."""
-    return tuple(replace(t, param="w_rest") if t.name == "rest" else t for t in terms)
 
 
 def _preset(target) -> int | None:
@@ -73,7 +67,7 @@ class HermanTouchObject(HermanTask):
                   doc=f"fingertip–object distance at the end + 0.5 × its mean over the last {HOLD} s (m)"),
              Term("limits", 0.1 * MAIN_WEIGHT, param="w_limits",
                   doc=f"fraction of the arm's joints on a limit of their range over the last {HOLD} s"),
-             *_rest_scaled(style_terms()))
+             *rest_scaled(style_terms()))
     success_threshold = f"fingertip within {TOUCH * 100:.0f} cm of the object at the end; {REST_RULE}"
 
     def validate(self):

@@ -396,6 +396,21 @@ def test_touch_site_measures_the_distance_to_that_site(herman):
     assert m["touch_end"][0] > 0.3 and not get_task("herman_touch").success(None, m)[0]
 
 
+def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
+    from gpmotion.families import make_family
+    v1, v2, nose = (get_task(t, site="knee_l") if t != "herman_touch_nose" else get_task(t)
+                    for t in ("herman_touch-v1", "herman_touch", "herman_touch_nose"))
+    assert v2.id == "herman_touch-v2" and v1.params == {"site": "knee_l", "seconds": 1.5}
+    rest = {t.id: {x.name: x.weight for x in t.terms}["rest"] for t in (v1, v2, nose)}
+    assert rest == {"herman_touch-v1": pytest.approx(3.0), "herman_touch-v2": pytest.approx(9.0),
+                    "herman_touch_nose-v1": pytest.approx(3.0)}      # nose: v1's scoring
+    assert {x.name: x.weight for x in get_task("herman_touch", site="knee_l", w_rest=1).terms}["rest"] == \
+        pytest.approx(3.0)
+    assert (v1.gp_targets, v2.gp_targets, nose.gp_targets) == ("angle", "rate", "angle")
+    assert make_family("gp", v2).make_search(0).config()["polish"] == 10
+    assert "polish" not in make_family("gp", v1).make_search(0).config()
+
+
 @pytest.mark.parametrize("site, why", [("bogus", "unknown site"), ("hand_r", "right arm"),
                                        ("foot_l", "fingertip reaches")])
 def test_touch_rejects_sites_it_cannot_touch(site, why):
