@@ -155,7 +155,8 @@ class HermanTouchV2(HermanTouch):
     and 62 cm/s).  v2's trees drive target rates (feedback on the error
     integrates to rest), the last 10 of the 50 generations polish the best,
     and the rest term weighs three times as much (``w_rest``, as
-    ``herman_touch_object-v2``'s target 1); docs/notes/herman.md."""
+    ``herman_touch_object-v2``'s target 1).  The nose (the default site)
+    keeps ``herman_touch_nose``'s recipe; docs/notes/herman.md."""
     version = 2
     params = {**HermanTouch.params, "w_rest": 3.0}
     param_docs = {**HermanTouch.param_docs,
@@ -163,3 +164,14 @@ class HermanTouchV2(HermanTouch):
     terms = rest_scaled(HermanTouch.terms)
     gp_targets = "rate"
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
+    # The nose keeps herman_touch_nose's recipe: rate targets failed there (0 / 5,
+    # elbow and wrists driven onto their limits), angles with 20 of polish 4 / 5
+    NOSE = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}, "w_rest": 1.0}
+
+    def __init__(self, **overrides):
+        nose = overrides.get("site", type(self).params["site"]) == "nose"
+        if nose and "w_rest" not in overrides:
+            overrides = {**overrides, "w_rest": self.NOSE["w_rest"]}
+        super().__init__(**overrides)
+        if nose:
+            self.gp_targets, self.gp_defaults = self.NOSE["gp_targets"], self.NOSE["gp_defaults"]

@@ -409,6 +409,11 @@ def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
     assert (v1.gp_targets, v2.gp_targets, nose.gp_targets) == ("angle", "rate", "angle")
     assert make_family("gp", v2).make_search(0).config()["polish"] == 10
     assert "polish" not in make_family("gp", v1).make_search(0).config()
+    # on the nose v2 is herman_touch_nose (rate targets fail there)
+    v2_nose = get_task("herman_touch")
+    assert (v2_nose.site, v2_nose.gp_targets) == ("nose", "angle")
+    assert {x.name: x.weight for x in v2_nose.terms} == {x.name: x.weight for x in nose.terms}
+    assert make_family("gp", v2_nose).make_search(0).config()["polish"] == 20
 
 
 @pytest.mark.parametrize("site, why", [("bogus", "unknown site"), ("hand_r", "right arm"),
