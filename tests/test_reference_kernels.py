@@ -5,7 +5,6 @@ fixed root with contacts on the root body, and a tilted root whose slide
 joints are turned), then one short rollout with the JIT disabled, so the
 kernels' Python source runs too and agrees with the compiled code.
 """
-import json
 import os
 import subprocess
 import sys
@@ -128,6 +127,26 @@ def test_aba_matches_dense_hybrid_dynamics(name, M):
     assert mattered >= 5
 
 
+def _contacts_match_reference(M, scene, rng):
+    """One random state, the ground at a random contact point's height (± a few
+    cm), random friction state: kernel and twin agree.  Returns the anchors in,
+    the twin's normal forces and anchors out."""
+    n, nc = len(M.parent), len(M.cp_link)
+    q, qd = random_state(M, rng)
+    pose, X, v, cbias, cs = run_kinematics(M, q, qd)
+    heights = [planar.point_world(pose, cs, l, *p)[1] if l >= 0 else
+               planar.fixed_point_world(*M.fixed_pose, *p)[1] for l, p in zip(M.cp_link, M.cp_pos)]
+    sc = scene._replace(ground_z=float(rng.choice(heights) + rng.uniform(-0.02, 0.05)))
+    anchor = rng.uniform(-1, 1, nc)
+    touching = (rng.random(nc) < 0.5).astype(float)
+    fext, cforce = np.zeros((n, 3)), np.zeros(nc)
+    a_k, t_k = anchor.copy(), touching.copy()
+    planar.ground_contacts(M, sc, pose, cs, v, a_k, t_k, fext, cforce)
+    rf, rc, ra, rt = ref.ground_contacts(M, sc, q, qd, anchor, touching)
+    assert close(fext, rf) and close(cforce, rc) and close(a_k, ra) and np.array_equal(t_k, rt)
+    return anchor, rc, ra
+
+
 @pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
 def test_ground_contacts_match_reference(name, M):
     rng = np.random.default_rng(12)
@@ -135,23 +154,12 @@ def test_ground_contacts_match_reference(name, M):
     n, nc = len(M.parent), len(M.cp_link)
     hits = slips = 0
     for _ in range(40):
-        q, qd = random_state(M, rng)
-        pose, X, v, cbias, cs = run_kinematics(M, q, qd)
-        # put the ground at the height of a random contact point, ± a few cm
-        heights = [planar.point_world(pose, cs, l, *p)[1] if l >= 0 else
-                   planar.fixed_point_world(*M.fixed_pose, *p)[1] for l, p in zip(M.cp_link, M.cp_pos)]
-        sc = scene._replace(ground_z=float(rng.choice(heights) + rng.uniform(-0.02, 0.05)))
-        anchor = rng.uniform(-1, 1, nc)
-        touching = (rng.random(nc) < 0.5).astype(float)
-        fext, cforce = np.zeros((n, 3)), np.zeros(nc)
-        a_k, t_k = anchor.copy(), touching.copy()
-        planar.ground_contacts(M, sc, pose, cs, v, a_k, t_k, fext, cforce)
-        rf, rc, ra, rt = ref.ground_contacts(M, sc, q, qd, anchor, touching)
-        assert close(fext, rf) and close(cforce, rc) and close(a_k, ra) and np.array_equal(t_k, rt)
+        anchor, rc, ra = _contacts_match_reference(M, scene, rng)
         hits += int((rc > 0).sum())
         slips += int((np.abs(ra - anchor) > 0).sum())
     assert hits > 10 and slips > 5          # the cases were exercised
     # no ground: no force, whatever the state
+    pose, X, v, cbias, cs = run_kinematics(M, *random_state(M, rng))
     fext, cforce = np.zeros((n, 3)), np.ones(nc)
     planar.ground_contacts(M, scene._replace(ground=0, ground_z=100.0), pose, cs, v,
                            np.zeros(nc), np.zeros(nc), fext, cforce)
@@ -162,21 +170,9 @@ def test_ground_contacts_match_reference(name, M):
 def test_shared_friction_contacts_match_reference(name, M):
     rng = np.random.default_rng(14)
     scene = gpmotion.make_scene(friction="shared", k_tangent=4000.0)
-    n, nc = len(M.parent), len(M.cp_link)
     shared = 0
     for _ in range(40):
-        q, qd = random_state(M, rng)
-        pose, X, v, cbias, cs = run_kinematics(M, q, qd)
-        heights = [planar.point_world(pose, cs, l, *p)[1] if l >= 0 else
-                   planar.fixed_point_world(*M.fixed_pose, *p)[1] for l, p in zip(M.cp_link, M.cp_pos)]
-        sc = scene._replace(ground_z=float(rng.choice(heights) + rng.uniform(-0.02, 0.05)))
-        anchor = rng.uniform(-1, 1, nc)
-        touching = (rng.random(nc) < 0.5).astype(float)
-        fext, cforce = np.zeros((n, 3)), np.zeros(nc)
-        a_k, t_k = anchor.copy(), touching.copy()
-        planar.ground_contacts(M, sc, pose, cs, v, a_k, t_k, fext, cforce)
-        rf, rc, ra, rt = ref.ground_contacts(M, sc, q, qd, anchor, touching)
-        assert close(fext, rf) and close(cforce, rc) and close(a_k, ra) and np.array_equal(t_k, rt)
+        _, rc, _ = _contacts_match_reference(M, scene, rng)
         shared += int((rc > 0).sum() >= 2)
     assert shared > 5                       # several points sharing one force were exercised
 
