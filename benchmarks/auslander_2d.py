@@ -32,8 +32,6 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
                   contact_distance: the paper's term read for pinned contacts
   star-contact-noslip, star-grounded-noslip  Star-Man's shuffle configurations on a
                   no-slip ground (friction 5: the paper's pinned contacts, approximated)
-  star-time-shared, star-contact-shared, beryl-periodic-shared  on the paper's
-                  friction (a lone touching point pinned, several sharing one force by load)
   beryl-periodic-t02, -t03, -t075, -t1, -tau03, -tau04  Beryl's periodic shuffle
                   at other periods t_per and τ floors
   beryl-*-unguided  the same two without a secondary term (the paper names none for
@@ -124,20 +122,6 @@ CONFIGS = {
                              {"w_grounded_distance": 2.0, "figure": "noslip:starman"}, {},
                              ("shuffle", "periodic shuffle"),
                              "Star-Man time-based + grounded_distance (w 2), no-slip ground (μ = 5)"),
-    # the paper's friction model (§2.1): a lone touching point is pinned, several
-    # share one horizontal force by load, so each may slide relative to the others
-    "star-time-shared": ("starman_travel", "bsr-time", {"figure": "shared:starman"}, {},
-                         ("shuffle", "periodic shuffle"),
-                         "Star-Man time-based, unguided, the paper's friction"),
-    "star-contact-shared": ("starman_travel", "bsr-time",
-                            {"w_contact_distance": 2.0, "figure": "shared:starman"}, {},
-                            ("shuffle", "periodic shuffle"),
-                            "Star-Man time-based + contact_distance (w 2), the paper's friction"),
-    "beryl-periodic-shared": ("beryl_travel", "bsr-time",
-                              {"w_contact_distance": 2.0, "figure": "shared:beryl"},
-                              {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
-                              "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s, "
-                              "the paper's friction"),
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
     "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},
@@ -163,8 +147,7 @@ def _fail(msg: str) -> None:
 
 NOSLIP_MU = 5.0
 # figure = "VARIANT:NAME": figure NAME on another ground
-GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU},
-                   "shared": {"friction": "shared"}}   # Auslander et al.'s friction (§2.1)
+GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU}}
 
 
 def _resolved(params: dict) -> dict:

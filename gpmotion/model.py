@@ -147,7 +147,6 @@ class Scene(NamedTuple):
     goal: np.ndarray        # float64[2] the goal point (x, z) senses refer to
     goal_y: float = 0.0     # its y: a 3-D figure's goal is (goal[0], goal_y, goal[1])
     obj: np.ndarray = np.zeros(0)   # a free object, its table and grip (gpmotion.sim.grip3d); empty: none
-    friction: int = 0       # 0: Coulomb per point; 1: Auslander et al.'s load-shared (planar only)
 
     @property
     def goal3(self) -> np.ndarray:
@@ -155,27 +154,16 @@ class Scene(NamedTuple):
         return np.array([self.goal[0], self.goal_y, self.goal[1]], dtype=np.float64)
 
 
-FRICTION = ("coulomb", "shared")     # Scene.friction by index (gpmotion.sim.planar.COULOMB, SHARED)
-
-
 def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
-               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=(),
-               friction="coulomb") -> Scene:
+               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=()) -> Scene:
     """A Scene with the defaults every shipped figure is stable with at dt=1 ms.
 
     ``goal``: (x, z) for planar figures, or (x, y, z) (a 3-D figure's senses
     refer to it; a planar one sees its (x, z)).
     ``obj``: a free object with its table and grip, 3-D figures only
     (``gpmotion.sim.grip3d.object_params``); empty: none.
-    ``friction``: ``"coulomb"`` (each touching point sticks on a spring to
-    where it touched down and slips beyond μ·Fn) or ``"shared"`` (Auslander et
-    al.'s: one horizontal force holds the load-weighted mean of the touching
-    points still, shared out by load, no μ; planar figures only;
-    ``gpmotion.sim.planar.shared_ground_contacts``).
     """
-    if friction not in FRICTION:
-        raise ValueError(f"scene: friction must be one of {', '.join(FRICTION)}, got {friction!r}")
     goal = np.asarray(goal, dtype=np.float64).reshape(-1)
     if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
         raise ValueError(f"scene: goal must be 2 (x, z) or 3 (x, y, z) finite numbers, got {goal.tolist()}")
@@ -191,8 +179,7 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
         raise ValueError("scene: poles need finite x, z and a radius > 0")
     return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
                  float(c_ground), float(mu), float(k_tangent), float(c_tangent),
-                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj),
-                 FRICTION.index(friction))
+                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj))
 
 
 def _object(obj) -> np.ndarray:

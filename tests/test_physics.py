@@ -104,52 +104,6 @@ def test_sliding_box_decelerates_at_mu_g():
     assert abs(vx[-1]) < 1e-3                           # and then it stays put
 
 
-def test_shared_friction_pins_a_sliding_box_as_a_damped_spring():
-    # Auslander et al.'s friction: touching points may not move horizontally,
-    # however fast the box comes in (Coulomb at μ 0.5 lets it slide 0.41 m,
-    # above).  The box's corners are at its centre's height, so the shared
-    # force −k_t·s − c_t·v is the only horizontal force and x is the damped
-    # oscillator m·ẍ = −k_t·x − c_t·ẋ, x(0) = 0, ẋ(0) = v0.
-    m, v0, k, c = 2.0, 2.0, 5000.0, 60.0
-    fig = gpmotion.load_figure(F.box(mass=m, z0=-0.002))
-    scene = gpmotion.make_scene(friction="shared", k_tangent=k, c_tangent=c)
-    qd0 = np.zeros(fig.nq)
-    qd0[0] = v0
-    w, zeta = np.sqrt(k / m), c / (2 * np.sqrt(k * m))
-    wd = w * np.sqrt(1 - zeta ** 2)
-    err = {}
-    for dt in (1e-3, 2.5e-4):
-        tr = gpmotion.simulate(fig, 1.0, scene=scene, qd0=qd0, dt=dt, record_every=1)
-        x = v0 / wd * np.exp(-zeta * w * tr.times) * np.sin(wd * tr.times)
-        err[dt] = np.abs(tr.q[0, :, 0] - x).max() / np.abs(x).max()
-        assert np.abs(tr.q[0, :, 0]).max() < 0.03 and abs(tr.q[0, -1, 0]) < 1e-4
-    # semi-implicit Euler: first order in dt (3 % at 1 ms, from c·dt/m)
-    assert err[2.5e-4] < 0.01 and err[1e-3] / err[2.5e-4] == pytest.approx(4, rel=0.15)
-
-
-def test_shared_friction_is_refused_on_a_3d_figure():
-    fig = gpmotion.load_figure("herman")
-    with pytest.raises(ValueError, match="planar"):
-        gpmotion.simulate(fig, 0.01, scene=gpmotion.make_scene(friction="shared"))
-    with pytest.raises(ValueError, match="friction"):
-        gpmotion.make_scene(friction="sticky")
-
-
-def test_a_figure_spec_names_its_friction():
-    from gpmotion.figures import resolve_spec
-    from gpmotion.figures.specparse import SpecError
-    fig = gpmotion.load_figure(resolve_spec({"extends": "starman", "name": "s",
-                                             "ground": {"friction": "shared"}}))
-    assert gpmotion.make_scene(**fig.ground).friction == 1
-    assert gpmotion.make_scene(**gpmotion.load_figure("starman").ground).friction == 0
-    with pytest.raises(SpecError, match="friction must be one of coulomb, shared"):
-        gpmotion.load_figure(resolve_spec({"extends": "starman", "name": "s",
-                                           "ground": {"friction": "sticky"}}))
-    with pytest.raises(SpecError, match="planar figures only"):
-        gpmotion.load_figure(resolve_spec({"extends": "bob", "name": "b",
-                                           "ground": {"friction": "shared"}}))
-
-
 def test_pd_servo_holds_with_the_static_error_gravity_demands():
     m, L, kp = 1.0, 1.0, 50.0
     # horizontal arm: gravity torque m g L/2 against the spring kp (θd − θ)

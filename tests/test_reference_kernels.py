@@ -167,17 +167,6 @@ def test_ground_contacts_match_reference(name, M):
 
 
 @pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
-def test_shared_friction_contacts_match_reference(name, M):
-    rng = np.random.default_rng(14)
-    scene = gpmotion.make_scene(friction="shared", k_tangent=4000.0)
-    shared = 0
-    for _ in range(40):
-        _, rc, _ = _contacts_match_reference(M, scene, rng)
-        shared += int((rc > 0).sum() >= 2)
-    assert shared > 5                       # several points sharing one force were exercised
-
-
-@pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
 def test_mechanical_energy_matches_reference(name, M):
     rng = np.random.default_rng(13)
     scene = gpmotion.make_scene()

@@ -237,8 +237,6 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
         raise SpecError("a figure spec must be a table/dict")
     name, raw_bodies, bodies = _name_and_bodies(spec, _body3d)
     check_ground(spec)
-    if spec.get("ground", {}).get("friction", "coulomb") != "coulomb":
-        raise SpecError("ground: friction = \"shared\" (Auslander et al.'s) is for planar figures only")
     root = spec.get("root", {})
     if not isinstance(root, dict):
         raise SpecError("root: must be a table")

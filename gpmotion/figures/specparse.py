@@ -8,7 +8,7 @@ import math
 import networkx as nx
 import numpy as np
 
-from ..model import FRICTION, Figure
+from ..model import Figure
 
 
 class SpecError(ValueError):
@@ -27,12 +27,8 @@ def check_ground(spec: dict) -> None:
     if not isinstance(g, dict):
         raise SpecError("ground: must be a table of " + ", ".join(GROUND_KEYS))
     for k in g:
-        if k == "friction":
-            if g[k] not in FRICTION:
-                raise SpecError(f"ground: friction must be one of {', '.join(FRICTION)}, got {g[k]!r}")
-            continue
         if k not in GROUND_KEYS:
-            raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS + ('friction',))}")
+            raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS)}")
         _num(g, k, "ground", positive=k != "mu", lo=0.0)
 
 

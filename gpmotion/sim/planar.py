@@ -50,7 +50,6 @@ REVOLUTE, SLIDE_X, SLIDE_Z = 0, 1, 2
 
 _JIT = dict(cache=True, error_model="numpy", boundscheck=False)
 _INLINE = dict(_JIT, inline="always")
-COULOMB, SHARED = 0, 1      # Scene.friction: per-point stick-slip; Auslander et al.'s load-shared
 
 
 @njit(**_INLINE)
@@ -299,9 +298,6 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
     ground, ground_z, k_ground, c_ground = S.ground, S.ground_z, S.k_ground, S.c_ground
     k_tangent, c_tangent, mu = S.k_tangent, S.c_tangent, S.mu
-    if S.friction == SHARED and ground != 0:
-        shared_ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce)
-        return
     for k in range(M.cp_link.shape[0]):
         cforce[k] = 0.0
         if ground == 0:
@@ -330,77 +326,6 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
             anchor[k] = x + (ft + c_tangent * vx) / k_tangent if k_tangent > 0 else x
         cforce[k] = fn
         apply_point_force(cs, fext, link, px, pz, ft, fn)
-
-
-@njit(**_INLINE)
-def _point_x(M, pose, cs, k):
-    """World x of contact point k."""
-    link, px, pz = M.cp_link[k], M.cp_pos[k, 0], M.cp_pos[k, 1]
-    if link >= 0:
-        return point_world(pose, cs, link, px, pz)[0]
-    return fixed_point_world(M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2], px, pz)[0]
-
-
-@njit(**_JIT)      # called, not inlined: only scenes with Auslander et al.'s friction use it
-def shared_ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
-    """Auslander et al.'s friction (their §2.1): one touching point may not move
-    horizontally; when several touch, their horizontal friction forces are in
-    the ratio of their normal forces.  So one horizontal force F, shared out by
-    load, holds the load-weighted mean of the touching points still, and a
-    point may slide relative to the others (a lightly loaded foot slides).
-
-    Penalty form: F = −k_t·s − c_t·v̄, with v̄ the load-weighted horizontal
-    velocity and s the shared stretch, its integral since contact began; each
-    touching point keeps ``anchor = x − s`` (so s is the load-weighted mean of
-    x − anchor, and a point joining the contact joins at the current s).  No μ:
-    the paper's points stick however hard they are pushed.
-    """
-    fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
-    nc = M.cp_link.shape[0]
-    # pass 1: normal forces; the stretch over the points that were touching
-    w_old = s_w = s_sum = 0.0
-    n_old = 0
-    for k in range(nc):
-        cforce[k] = 0.0
-        link, px, pz = M.cp_link[k], M.cp_pos[k, 0], M.cp_pos[k, 1]
-        if link >= 0:
-            x, z = point_world(pose, cs, link, px, pz)
-        else:
-            x, z = fixed_point_world(fth, fx, fz, px, pz)
-        pen = S.ground_z - z
-        if pen <= 0.0:
-            touching[k] = 0.0
-            continue
-        fn = S.k_ground * pen - S.c_ground * point_velocity(cs, v, link, px, pz)[1]
-        cforce[k] = fn if fn > 0.0 else 0.0
-        if touching[k] == 0.0:
-            touching[k] = -1.0                # new this step: joins in pass 2
-            continue
-        w_old += cforce[k]
-        s_w += cforce[k] * (x - anchor[k])
-        s_sum += x - anchor[k]
-        n_old += 1
-    stretch = 0.0
-    if w_old > 0.0:
-        stretch = s_w / w_old
-    elif n_old > 0:               # touching, but none pressing: their plain mean
-        stretch = s_sum / n_old
-    # pass 2: every touching point at the current stretch; the load-weighted velocity
-    w_all = v_w = 0.0
-    for k in range(nc):
-        if touching[k] == 0.0:
-            continue
-        touching[k] = 1.0
-        anchor[k] = _point_x(M, pose, cs, k) - stretch
-        w_all += cforce[k]
-        v_w += cforce[k] * point_velocity(cs, v, M.cp_link[k], M.cp_pos[k, 0], M.cp_pos[k, 1])[0]
-    if w_all <= 0.0:
-        return                    # nothing presses: no friction (as Coulomb's μ·0)
-    f = -S.k_tangent * stretch - S.c_tangent * v_w / w_all
-    for k in range(nc):
-        if cforce[k] > 0.0:
-            apply_point_force(cs, fext, M.cp_link[k], M.cp_pos[k, 0], M.cp_pos[k, 1],
-                              f * cforce[k] / w_all, cforce[k])
 
 
 @njit(**_JIT)

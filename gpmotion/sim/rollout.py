@@ -199,9 +199,6 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     n_steps = int(steps.max())
     steps = np.array(np.broadcast_to(steps, (E,)))
     backend = backend_of(m)
-    if scene.friction != 0 and figure.dimensions != 2:
-        raise ValueError("scene: the shared (Auslander et al.) friction is for planar figures; "
-                         "a 3-D figure's ground uses Coulomb friction")
     has_obj = len(scene.obj) > 0
     if has_obj and (figure.dimensions != 3 or not 0 <= scene.obj[O_LINK] < len(m.parent)):
         raise ValueError(f"scene: a free object needs a 3-D figure and a gripping link of it; "

@@ -179,8 +179,6 @@ def ground_contacts(M, S, q, qd, anchor, touching):
     Returns ``(fext [nl, 3] spatial forces in link coordinates, cforce [nc],
     anchor, touching)``; ``anchor`` and ``touching`` are updated copies.
     """
-    if S.friction == 1 and S.ground:
-        return shared_ground_contacts(M, S, q, qd, anchor, touching)
     pose, v = poses_and_velocities(M, q, qd)
     anchor, touching = np.array(anchor, float), np.array(touching, float)
     fext, cforce = np.zeros((len(q), 3)), np.zeros(len(M.cp_link))
@@ -211,48 +209,3 @@ def ground_contacts(M, S, q, qd, anchor, touching):
             f = R.T @ np.array([ft, fn])                     # force in link coordinates
             fext[link] += (p[0] * f[1] - p[1] * f[0], f[0], f[1])   # moment about the origin
     return fext, cforce, anchor, touching
-
-
-def _points(M, q, qd):
-    """World positions [nc, 2] and velocities [nc, 2] of the contact points."""
-    pose, v = poses_and_velocities(M, q, qd)
-    x, vel = np.zeros((len(M.cp_link), 2)), np.zeros((len(M.cp_link), 2))
-    for k, (link, p) in enumerate(zip(M.cp_link, M.cp_pos)):
-        th, px, pz = pose[link] if link >= 0 else M.fixed_pose
-        R = rot(th)
-        x[k] = np.array([px, pz]) + R @ p
-        if link >= 0:
-            w = v[link, 0]
-            vel[k] = R @ (v[link, 1:] + w * np.array([-p[1], p[0]]))
-    return x, vel
-
-
-def shared_ground_contacts(M, S, q, qd, anchor, touching):
-    """Auslander et al.'s load-shared friction, the plain way: the touching
-    points' stretch s is their load-weighted mean of x − anchor (old points;
-    unweighted if none presses), new points join at s, and one force
-    −k_t·s − c_t·(load-weighted vx) is shared out in proportion to load."""
-    x, vel = _points(M, q, qd)
-    anchor, touching = np.array(anchor, float), np.array(touching, float)
-    pose, _ = poses_and_velocities(M, q, qd)
-    pen = S.ground_z - x[:, 1]
-    down = pen > 0
-    fn = np.where(down, np.maximum(0.0, S.k_ground * pen - S.c_ground * vel[:, 1]), 0.0)
-    old = down & (touching != 0)
-    if old.any() and fn[old].sum() > 0:
-        s = (fn[old] * (x[old, 0] - anchor[old])).sum() / fn[old].sum()
-    elif old.any():
-        s = (x[old, 0] - anchor[old]).mean()
-    else:
-        s = 0.0
-    touching = down.astype(float)
-    anchor = np.where(down, x[:, 0] - s, anchor)
-    fext = np.zeros((len(q), 3))
-    if fn.sum() > 0:
-        f = -S.k_tangent * s - S.c_tangent * (fn * vel[:, 0]).sum() / fn.sum()
-        for k, (link, p) in enumerate(zip(M.cp_link, M.cp_pos)):
-            if fn[k] > 0 and link >= 0:
-                R = rot(pose[link][0])
-                fl = R.T @ np.array([f * fn[k] / fn.sum(), fn[k]])
-                fext[link] += (p[0] * fl[1] - p[1] * fl[0], fl[0], fl[1])
-    return fext, fn, anchor, touching
