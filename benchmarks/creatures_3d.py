@@ -191,6 +191,7 @@ def steps(a) -> int:
     from gpmotion.bsr import secondary3d as s3
     from gpmotion.families import make_family
     from gpmotion.replay import load_controller, replay_genome
+    from gpmotion.tasks._creature3d import foot_tracks
     task = gpmotion.get_task(a.task)
     print("| run | recorded task | evaluations | steps | touchdowns ahead | forward m | facing ° | "
           "fallen % | solved |\n|---|---|---|---|---|---|---|---|---|")
@@ -207,11 +208,10 @@ def steps(a) -> int:
               f"{'yes' if ok[0] else 'no'} |")
         if a.touchdowns:
             fig = traj.figure
-            xy = traj.sites()[0][:, [fig.site_names.index(n) for n in task.foot_sites], :2]
-            yaw = s3.heading(traj.base()[0][..., 3:7])
-            fwd = np.stack([s3.in_start_frame(xy[:, k, :], yaw[0])[..., 0] for k in range(2)], -1)
-            force = np.stack([traj.contact_force[0][:, [fig.contact_names.index(n) for n in g]].sum(-1)
-                              for g in task.foot_groups], -1)
+            xy = traj.sites()[..., [fig.site_names.index(n) for n in task.foot_sites], :2]
+            yaw = s3.heading(traj.base()[..., 3:7])
+            fwd, force = foot_tracks(traj, xy, task.foot_groups, yaw)
+            fwd, force, yaw = fwd[0], force[0], yaw[0]
             down = force > 0
             dt = task.dt * task.record_every
             for f in np.flatnonzero((down[1:] & ~down[:-1]).any(-1)) + 1:

@@ -59,14 +59,28 @@ FACTS = {
 }
 
 
+def foot_tracks(traj, xy, foot_groups, yaw, cut=slice(None)):
+    """A biped's feet over frames ``cut``: forward position in the start
+    heading's frame [..., F, 2] and normal force [..., F, 2] (each foot's
+    contact points summed), from the feet's sites ``xy`` [..., F, 2, 2] and
+    ``yaw`` [..., F] over the same frames."""
+    fig = traj.figure
+    fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
+    force = np.stack([traj.contact_force[..., cut, [fig.contact_names.index(n) for n in g]].sum(-1)
+                      for g in foot_groups], -1)
+    return fwd, force
+
+
 def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX_TILT,
-                      min_height=s3.MIN_HEIGHT, frames=None) -> dict[str, np.ndarray]:
+                      min_height=s3.MIN_HEIGHT, frames=None, alternate=False) -> dict[str, np.ndarray]:
     """Every term above for a batch.  ``feet``: the foot contact points' names
     (any other point on the ground means a fall); ``foot_sites``: a site per
     foot; ``foot_groups``: for a biped, the contact points of each foot;
     ``max_tilt`` (rad), ``min_height`` (fraction): the fall thresholds;
     ``frames``: measure all but ``fall`` and ``fell`` over the first
-    ``frames`` frames only (``hold``; default all)."""
+    ``frames`` frames only (``hold``; default all); ``alternate``: ``steps``
+    counts only steps of the feet taking turns, and ``touchdowns`` every
+    touchdown ahead (``steps`` without it; ``secondary3d.count_steps``)."""
     fig = traj.figure
     base = traj.base()
     quat = base[..., 3:7]
@@ -85,10 +99,11 @@ def creature_measures(traj, feet, foot_sites=(), foot_groups=(), max_tilt=s3.MAX
         xy = traj.sites()[..., cut, [fig.site_names.index(n) for n in foot_sites], :2]
         out["feet_forward"] = s3.feet_forward(xy, yaw[..., 0])
         if len(foot_groups) == 2:
-            fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
-            force = np.stack([traj.contact_force[..., cut, [fig.contact_names.index(n) for n in g]].sum(-1)
-                              for g in foot_groups], -1)
+            fwd, force = foot_tracks(traj, xy, foot_groups, yaw, cut)
             out["steps"] = s3.count_steps(force, fwd, fell, yaw).astype(np.float64)
+            if alternate:
+                out["touchdowns"] = out["steps"]
+                out["steps"] = s3.count_steps(force, fwd, fell, yaw, alternate=True).astype(np.float64)
     return out
 
 
@@ -100,6 +115,7 @@ class CreatureTask(Task):
     max_tilt = s3.MAX_TILT          # fallen: root tilted further (rad) ...
     min_height = s3.MIN_HEIGHT      # ... or com below this fraction of its start height
     facts: tuple[str, ...] = ()     # what describe() reports, in order (FACTS)
+    alternate_steps = False         # steps: only the feet taking turns (creature_measures)
     record_every = RECORD_EVERY
     param_docs = {"seconds": "episode length (s)",
                   "w_sideways": "penalty per m of sideways com motion",
@@ -148,7 +164,7 @@ class CreatureTask(Task):
         if self.params.get("hold"):
             frames = int(round(self.motion_seconds / (self.dt * self.record_every))) + 1
         return creature_measures(traj, self.feet, self.foot_sites, self.foot_groups,
-                                 self.max_tilt, self.min_height, frames)
+                                 self.max_tilt, self.min_height, frames, self.alternate_steps)
 
     def describe(self, traj, m, e=0):
         return [", ".join(FACTS[f](m, e) for f in self.facts)]

@@ -8,7 +8,6 @@ ahead of the other) before falling, facing within 45° of the start heading.
 """
 import numpy as np
 
-from gpmotion.bsr import secondary3d as s3
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._creature3d import DISTANCE, FACTS, FALL, SIDEWAYS, CreatureTask
 
@@ -86,32 +85,9 @@ class BobWalkV3(BobWalkV2):
     success_threshold = "≥ 5 alternating forward steps before falling, facing forward"
     facts = ("steps", "touchdowns", "forward", "sideways", "facing", "fallen")
 
-    def measure(self, traj):
-        m = super().measure(traj)
-        m["touchdowns"], m["steps"] = m["steps"], alternating_steps(self, traj)
-        return m
+    alternate_steps = True          # steps: the feet taking turns; touchdowns: v2's count
 
     def describe(self, traj, m, e=0):
         facts = {**FACTS, "touchdowns": lambda m, e: f"{int(m['touchdowns'][e])} touchdowns ahead"}
         return [", ".join(facts[f](m, e) for f in self.facts)]
 
-
-def alternating_steps(task, traj):
-    """Alternating steps per episode: the feet's forces, forward positions,
-    falls and heading as ``creature_measures`` reads them (v1/v2's count),
-    counted with ``secondary3d.count_steps(..., alternate=True)``."""
-    fig = traj.figure
-    quat = traj.base()[..., 3:7]
-    yaw = s3.heading(quat)
-    other = [k for k, n in enumerate(fig.contact_names) if n not in task.feet]
-    fell = s3.fallen(s3.quat_up(quat)[..., 2], traj.com[..., 2], traj.contact_force[..., other],
-                     task.max_tilt, task.min_height)
-    cut = slice(None, None)
-    if task.params.get("hold"):
-        cut = slice(None, int(round(task.motion_seconds / (task.dt * task.record_every))) + 1)
-    yaw, fell = yaw[..., cut], fell[..., cut]
-    xy = traj.sites()[..., cut, [fig.site_names.index(n) for n in task.foot_sites], :2]
-    fwd = np.stack([s3.in_start_frame(xy[..., k, :], yaw[..., 0])[..., 0] for k in range(2)], -1)
-    force = np.stack([traj.contact_force[..., cut, [fig.contact_names.index(n) for n in g]].sum(-1)
-                      for g in task.foot_groups], -1)
-    return s3.count_steps(force, fwd, fell, yaw, alternate=True).astype(np.float64)

@@ -29,7 +29,6 @@ PRESETS = (            # pelvis frame (m)
 )
 
 
-
 def _preset(target) -> int | None:
     try:
         return int(float(target))
