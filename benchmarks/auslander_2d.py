@@ -55,6 +55,15 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 
+
+def _beryl_periodic(t_per=0.5, bsr_dt=0.1, term="contact_distance", weight=2.0):
+    """A Beryl periodic-shuffle configuration (Fig. 12's t_per << T): time-based,
+    period ``t_per``, τ ≥ 2·``bsr_dt``, one secondary term at ``weight``."""
+    return ("beryl_travel", "bsr-time", {f"w_{term}": weight}, {"t_per": t_per, "bsr_dt": bsr_dt},
+            ("periodic shuffle",),
+            f"Beryl time-based, t_per = {t_per:g} s, + {term} (w {weight:g}), τ ≥ {2 * bsr_dt:g} s")
+
+
 # name: (task, family, task params, family options, expected gait(s), label)
 CONFIGS = {
     "star-sense": ("starman_travel", "bsr-sense", {}, {"rules": 10}, ("shuffle", "periodic shuffle"),
@@ -77,41 +86,21 @@ CONFIGS = {
     # tumble (seed 0, 10,000 evaluations); at 4 the same seed tumbles (1.11 turns)
     "beryl-tumble": ("beryl_travel", "bsr-time", {"w_rotations": 4.0}, {"bsr_dt": 0.1}, ("tumble",),
                      "Beryl time-based, t_per = T, + rotations (w 4), τ ≥ 0.2 s"),
-    "beryl-periodic": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                       {"t_per": 0.5, "bsr_dt": 0.1},
-                       ("periodic shuffle",),
-                       "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic": _beryl_periodic(),
     # shorter periods (Fig. 12's t_per << T; the paper gives no value): at 0.5 s
     # 2 / 5 shuffle periodically and the misses hop or tip forward
-    "beryl-periodic-t03": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                           {"t_per": 0.3, "bsr_dt": 0.1}, ("periodic shuffle",),
-                           "Beryl time-based, t_per = 0.3 s, + contact_distance (w 2), τ ≥ 0.2 s"),
-    "beryl-periodic-t02": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                           {"t_per": 0.2, "bsr_dt": 0.1}, ("periodic shuffle",),
-                           "Beryl time-based, t_per = 0.2 s, + contact_distance (w 2), τ ≥ 0.2 s"),
-    "beryl-periodic-t075": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                            {"t_per": 0.75, "bsr_dt": 0.1}, ("periodic shuffle",),
-                            "Beryl time-based, t_per = 0.75 s, + contact_distance (w 2), τ ≥ 0.2 s"),
-    "beryl-periodic-t1": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                          {"t_per": 1.0, "bsr_dt": 0.1}, ("periodic shuffle",),
-                          "Beryl time-based, t_per = 1 s, + contact_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic-t03": _beryl_periodic(0.3),
+    "beryl-periodic-t02": _beryl_periodic(0.2),
+    "beryl-periodic-t075": _beryl_periodic(0.75),
+    "beryl-periodic-t1": _beryl_periodic(1.0),
     # slower responses (a higher τ floor) make a hop's push-off harder
-    "beryl-periodic-tau03": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                             {"t_per": 0.5, "bsr_dt": 0.15}, ("periodic shuffle",),
-                             "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.3 s"),
-    "beryl-periodic-tau04": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0},
-                             {"t_per": 0.5, "bsr_dt": 0.2}, ("periodic shuffle",),
-                             "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.4 s"),
-    # contact_distance weighted 4: at 2 and 40,000 evaluations a 6.5 m hop
-    # (cost -12.1) beat a 2.4 m periodic shuffle (-11.3) on Beryl, and
-    # Star-Man's best were shuffles with one 40-80 ms flight
+    "beryl-periodic-tau03": _beryl_periodic(bsr_dt=0.15),
+    "beryl-periodic-tau04": _beryl_periodic(bsr_dt=0.2),
     # Table 3's contact_distance read for the paper's pinned contacts (com travel
     # while some point touches: gpmotion.bsr.secondary.grounded_distance)
     "star-grounded": ("starman_travel", "bsr-time", {"w_grounded_distance": 2.0}, {},
                       ("shuffle", "periodic shuffle"), "Star-Man time-based + grounded_distance (w 2)"),
-    "beryl-periodic-grounded": ("beryl_travel", "bsr-time", {"w_grounded_distance": 2.0},
-                                {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
-                                "Beryl time-based, t_per = 0.5 s, + grounded_distance (w 2), τ ≥ 0.2 s"),
+    "beryl-periodic-grounded": _beryl_periodic(term="grounded_distance"),
     # the paper's pinned contacts, approximated: friction μ = 5 (ours: 0.8), so a
     # touching point holds on its anchor spring instead of sliding
     "star-contact-noslip": ("starman_travel", "bsr-time",
@@ -122,11 +111,12 @@ CONFIGS = {
                              {"w_grounded_distance": 2.0, "figure": "noslip:starman"}, {},
                              ("shuffle", "periodic shuffle"),
                              "Star-Man time-based + grounded_distance (w 2), no-slip ground (μ = 5)"),
+    # contact_distance weighted 4: at 2 and 40,000 evaluations a 6.5 m hop
+    # (cost -12.1) beat a 2.4 m periodic shuffle (-11.3) on Beryl, and
+    # Star-Man's best were shuffles with one 40-80 ms flight
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
-    "beryl-periodic-w4": ("beryl_travel", "bsr-time", {"w_contact_distance": 4.0},
-                          {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
-                          "Beryl time-based, t_per = 0.5 s, + contact_distance (w 4), τ ≥ 0.2 s"),
+    "beryl-periodic-w4": _beryl_periodic(weight=4.0),
     # the paper's Beryl configurations name no secondary term; unguided, ours hops
     "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
                               "Beryl time-based, t_per = T, unguided"),
@@ -151,9 +141,9 @@ GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU}}
 
 
 def _resolved(params: dict) -> dict:
-    """A config's task parameters; ``figure = "noslip:NAME"`` becomes the spec of
-    figure NAME on a ground of friction NOSLIP_MU (stored in the run, as
-    ``gpmotion run --figure`` stores a variant)."""
+    """A config's task parameters; ``figure = "VARIANT:NAME"`` becomes the spec of
+    figure NAME on the ground GROUND_VARIANTS[VARIANT] (``noslip``: friction
+    NOSLIP_MU), stored in the run as ``gpmotion run --figure`` stores a variant."""
     out = dict(params)
     fig = out.get("figure")
     if isinstance(fig, str) and ":" in fig:
