@@ -6,7 +6,8 @@ motion that has come to rest (tasks/_herman.py: REST_SPEED, SETTLE).
 
 Each run is one line of ``--out`` (JSON lines: config, seed, success, wall
 time, CPU time, the load average when it started, the best controller's
-facts).  On a loaded machine the wall time says little.  ``cpu_s`` is the
+facts, and ``crossing_cm``: how far its right forearm or hand goes into the
+trunk at the deepest, a check on every task, whatever it scores).  On a loaded machine the wall time says little.  ``cpu_s`` is the
 process's CPU time (user + system, numba's threads included); ``main_cpu_s``
 the main thread's alone, which estimates the run's wall time on a quiet
 2-core machine: numba's OpenMP pool runs every rollout batch on the main
@@ -61,6 +62,7 @@ CONFIGS = {
 EXTRA = {   # not in the bar; --only names them
     "touch/knee_l": ("herman_touch", {"site": "knee_l"}),
     "touch/elbow_l": ("herman_touch", {"site": "elbow_l"}),
+    "touch/nose": ("herman_touch", {"site": "nose"}),
     "grasp": ("herman_grasp", {}),
 }
 
@@ -86,6 +88,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
             checkpoint_every=CHECKPOINT_S)
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
+        crossing = _crossing(out / "best.json")
     return {"config": name, "seed": seed, "targets": family.get("targets", "task default"),
             **({"search": search} if search else {}),
             **({"params": extra} if extra else {}),
@@ -93,7 +96,17 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
             "success": bool(best["success"]),
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "main_cpu_s": round(main, 1), "load": round(load, 1),
-            "final_cost": round(best["final_cost"], 4), "facts": best.get("facts", [])}
+            "final_cost": round(best["final_cost"], 4), "crossing_cm": round(crossing * 100, 1),
+            "facts": best.get("facts", [])}
+
+
+def _crossing(path) -> float:
+    """How far (m) the best controller's right forearm or hand goes into the
+    trunk at its deepest (``limbs_overlap``; a check, whatever the task scores)."""
+    from gpmotion.replay import load_controller, replay_genome
+    from gpmotion.tasks._herman import limbs_overlap
+    task, family, actuation, genome, _ = load_controller(path)
+    return float(limbs_overlap(replay_genome(task, family, actuation, genome)[0]).max())
 
 
 def done(path: Path) -> list[dict]:

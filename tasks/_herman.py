@@ -168,6 +168,34 @@ def through_torso(traj, points=("hand_r", "fingertip_r")):
     return (worst > 0).mean(axis=1) + worst.max(axis=1)
 
 
+def limbs_overlap(traj, bodies=("forearm_r", "hand_r"), samples=9) -> np.ndarray:
+    """[E, F] the deepest overlap (m) of ``bodies``' capsules with the torso's
+    cylinder in each frame (0 apart), sampled at ``samples`` points along
+    each capsule's axis.  A forearm can cross the trunk with both its end
+    points outside, which ``through_torso`` does not see."""
+    fig = traj.figure
+    i, r = _segment(fig, "torso")
+    seg = traj.segments()
+    a, b = seg[..., i, 0, :], seg[..., i, 1, :]
+    worst = np.zeros(traj.q.shape[:2])
+    for body in bodies:
+        j, rj = _segment(fig, body)
+        for s in np.linspace(0.0, 1.0, samples):
+            p = seg[..., j, 0, :] * (1.0 - s) + seg[..., j, 1, :] * s
+            d, t = point_axis_distance(p, a, b)
+            worst = np.maximum(worst, np.where((t > 0.0) & (t < 1.0), np.maximum(r + rj - d, 0.0), 0.0))
+    return worst
+
+
+def limbs_through_torso(overlap, fig, allow: float) -> np.ndarray:
+    """``through_torso``'s value for ``limbs_overlap``: the fraction of frames
+    overlapping by more than ``allow`` (m: a forearm resting on the belly)
+    plus the deepest overlap beyond it as a fraction of the torso's radius."""
+    r = _segment(fig, "torso")[1]
+    excess = np.maximum(overlap - allow, 0.0)
+    return (excess > 0).mean(axis=1) + np.minimum(excess.max(axis=1) / r, 1.0)
+
+
 def posture(traj, controlled=ARM):
     """Mean over frames of the RMS deviation of the PD-held joints from neutral (rad)."""
     fig = traj.figure

@@ -17,14 +17,20 @@ over the last 0.5 s (the finger should arrive and stay).  Success: within
 points as every Herman task.  ``herman_touch_nose`` is this task with the
 site fixed to the nose.
 """
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
-                                    rest_scaled, site_at_rest, style_measures, style_terms, tail)
+                                    limbs_overlap, limbs_through_torso, rest_scaled, site_at_rest, style_measures, style_terms,
+                                    tail)
 
 TOUCH = 0.03            # m: "touching"
+CROSSING = 0.01         # m: v3 allows the forearm this far into the trunk, in its style term and
+                        # its success (capsules are rounder than a body: a forearm resting on the
+                        # belly overlaps a little)
 HOLD = 0.5              # s: the window of the averaged distance
 WAIST = ("waist_y", "waist_x", "waist_z")
 LEFT_ARM = ("shoulder_l_y", "shoulder_l_z", "shoulder_l_x", "elbow_l", "wrist_l_y", "wrist_l_x")
@@ -110,9 +116,12 @@ class HermanTouch(HermanTask):
             raise ValueError(f"{self.name}: unknown site {site!r}; sites: {', '.join(f.site_names)}")
         if f.link_names[f.site_link[f.site_names.index(site)]] in ARM:   # links named by joint
             raise ValueError(f"{self.name}: site {site!r} is on the right arm, which does the touching")
-        joints = joints_for(f, site)
+        joints = self._joints(f, site)
         if joints != ARM:                     # more of the body under GP for this site
             self.controlled, self.terminals = joints, senses_of(joints)
+
+    def _joints(self, f, site):
+        return joints_for(f, site)
 
     @property
     def site(self) -> str:
@@ -175,3 +184,42 @@ class HermanTouchV2(HermanTouch):
         super().__init__(**overrides)
         if nose:
             self.gp_targets, self.gp_defaults = self.NOSE["gp_targets"], self.NOSE["gp_defaults"]
+
+
+
+@register_task
+class HermanTouchV3(HermanTouchV2):
+    """v3: the forearm may not cross the trunk, and a left-arm site the right
+    arm reaches alone leaves the left arm held.
+
+    * ``through`` watches the right forearm's and hand's capsules
+      (``limbs_through_torso``), not only the hand and fingertip points: a
+      right-arm-only run touched the left elbow with its forearm through the
+      trunk (13.6 cm of capsule overlap), both its end points outside.
+    * The left elbow is reached by the right arm alone, around the front of
+      the trunk (least squares, capsules apart: tests/test_herman.py).  Under
+      v2 both arms were under GP and the senses' goal, the site at the
+      neutral pose, drifted as the left arm moved: elbow_l 3 / 5.
+    docs/notes/herman.md, session 15."""
+    version = 3
+    success_threshold = (f"{HermanTouchV2.success_threshold}; forearm and hand never more than "
+                         f"{CROSSING * 100:.0f} cm into the trunk's cylinder")
+    RIGHT_ARM_REACHES = ("elbow_l",)    # left-arm sites: tests/test_herman.py
+    terms = tuple(replace(t, doc="right forearm or hand capsule overlapping the torso's cylinder: "
+                                 "fraction of frames + depth/radius") if t.name == "through" else t
+                  for t in HermanTouchV2.terms)
+
+    def _joints(self, f, site):
+        return ARM if site in self.RIGHT_ARM_REACHES else super()._joints(f, site)
+
+    def measure(self, traj):
+        overlap = limbs_overlap(traj)
+        return {**super().measure(traj), "through": limbs_through_torso(overlap, traj.figure, CROSSING),
+                "crossing": overlap.max(axis=1)}
+
+    def reached(self, traj, m):
+        return super().reached(traj, m) & (m["crossing"] <= CROSSING)
+
+    def describe(self, traj, m):
+        return [*super().describe(traj, m),
+                f"forearm and hand at most {m['crossing'][0] * 100:.1f} cm into the trunk"]

@@ -384,6 +384,43 @@ def test_touch_a_left_arm_site_brings_both_arms_under_gp(herman):
     assert get_task("herman_touch", site="belly").measure(_still(herman, q))["posture"][0] > 0.1
 
 
+# right-arm poses on the left elbow: around the front of the trunk, and through it
+AROUND = dict(shoulder_r_y=0.4, shoulder_r_z=1.0, shoulder_r_x=0.43, elbow_r=1.34, wrist_r_y=-0.39,
+              wrist_r_x=0.07)
+ACROSS = dict(shoulder_r_y=0.02, shoulder_r_z=1.4, shoulder_r_x=0.22, elbow_r=1.53, wrist_r_y=0.02,
+              wrist_r_x=0.15)
+
+
+def test_touch_v3_touches_the_left_elbow_with_the_right_arm_alone(herman):
+    """v3 keeps the left arm held for a left-arm site the right arm reaches
+    (RIGHT_ARM_REACHES: a pose with the forearm clear of the trunk); v2 drove both arms."""
+    from gpmotion.tasks.herman_touch import LEFT_ARM, HermanTouchV3
+    assert HermanTouchV3.RIGHT_ARM_REACHES == ("elbow_l",)
+    assert herman.link_names[herman.site_link[herman.site_names.index("elbow_l")]] in LEFT_ARM
+    assert tuple(get_task("herman_touch-v3", site="elbow_l").controlled) == ARM
+    assert tuple(get_task("herman_touch-v2", site="elbow_l").controlled) == ARM + LEFT_ARM
+    assert tuple(get_task("herman_touch-v3", site="hand_l").controlled) == ARM + LEFT_ARM
+    m = get_task("herman_touch-v3", site="elbow_l").measure(_still(herman, pose_q(herman, **AROUND)))
+    assert m["touch_end"][0] < 0.005 and m["crossing"][0] < 0.005 and m["through"][0] == 0.0
+
+
+def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
+    """ACROSS touches the left elbow with the right forearm through the trunk:
+    v2 judged it a success, v3 charges its through term and fails it."""
+    from gpmotion.tasks.herman_touch import CROSSING
+    tr = _still(herman, pose_q(herman, **ACROSS))
+    v2, v3 = (get_task(v, site="elbow_l") for v in ("herman_touch-v2", "herman_touch-v3"))
+    m2, m3 = v2.measure(tr), v3.measure(tr)
+    assert m2["touch_end"][0] < 0.005 and v2.success(tr, m2)[0]
+    assert m3["crossing"][0] > 0.1 and not v3.success(tr, m3)[0]
+    assert m3["through"][0] > m2["through"][0] > 0.0     # whole capsules, not two points
+    # resting on the belly (within CROSSING) costs nothing
+    overlap = np.full(tr.q.shape[:2], CROSSING * 0.9)
+    from gpmotion.tasks._herman import limbs_through_torso
+    assert limbs_through_torso(overlap, herman, CROSSING)[0] == 0.0
+    assert limbs_through_torso(overlap + 0.02, herman, CROSSING)[0] > 1.0
+
+
 def test_touch_site_measures_the_distance_to_that_site(herman):
     task = get_task("herman_touch", site="chest")
     chest = _site(herman, herman.q_default, "chest")
@@ -399,7 +436,7 @@ def test_touch_site_measures_the_distance_to_that_site(herman):
 def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
     from gpmotion.families import make_family
     v1, v2, nose = (get_task(t, site="knee_l") if t != "herman_touch_nose" else get_task(t)
-                    for t in ("herman_touch-v1", "herman_touch", "herman_touch_nose"))
+                    for t in ("herman_touch-v1", "herman_touch-v2", "herman_touch_nose"))
     assert v2.id == "herman_touch-v2" and v1.params == {"site": "knee_l", "seconds": 1.5}
     rest = {t.id: {x.name: x.weight for x in t.terms}["rest"] for t in (v1, v2, nose)}
     assert rest == {"herman_touch-v1": pytest.approx(3.0), "herman_touch-v2": pytest.approx(9.0),
@@ -409,7 +446,7 @@ def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
     assert (v1.gp_targets, v2.gp_targets, nose.gp_targets) == ("angle", "rate", "angle")
     assert make_family("gp", v2).make_search(0).config()["polish"] == 10
     assert "polish" not in make_family("gp", v1).make_search(0).config()
-    # on the nose v2 is herman_touch_nose (rate targets fail there)
+    # on the nose v2 (and the newest) is herman_touch_nose (rate targets fail there)
     v2_nose = get_task("herman_touch")
     assert (v2_nose.site, v2_nose.gp_targets) == ("nose", "angle")
     assert {x.name: x.weight for x in v2_nose.terms} == {x.name: x.weight for x in nose.terms}
