@@ -2,7 +2,7 @@
 
     python benchmarks/creatures_3d.py rates TASK [--families bsr-time,bsr-sense,gp]
                                       [--seeds 5] [--budget N] [--out DIR]
-    python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--out DIR]
+    python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--t-per S] [--out DIR]
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
     python benchmarks/creatures_3d.py mujoco [--quick]
     python benchmarks/creatures_3d.py curves LABEL=RUN_DIR ... [--out PNG]
@@ -21,6 +21,8 @@
   three controllers run as one composite (gpmotion.compose, state carried
   across each switch); prints each stage's numbers and whether the whole
   sequence completes (walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m, never fallen).
+  ``--t-per`` sets the time-based BSR period of all three stages (default
+  FAMILY_OPTIONS'); each stage's family options are in sequence.json.
 * ``speed``: one time-based Rex walk search until its first acceptable
   controller (``rex_walk`` solved: its success threshold); wall and CPU
   seconds and evaluations.
@@ -57,6 +59,14 @@ def options(task: str) -> dict:
     return {"bsr-sense": SENSE_OPTIONS, "gp": GP_OPTIONS, **FAMILY_OPTIONS.get(task, {})}
 
 
+def seconds(text: str) -> float:
+    """A positive number of seconds (argparse type)."""
+    v = float(text)
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0 s, got {text}")
+    return v
+
+
 def rates(a) -> int:
     from gpmotion.compare import compare
     fams = a.families.split(",")
@@ -68,12 +78,13 @@ def rates(a) -> int:
     return 0
 
 
-def search(task, family: str, seed: int, budget: int, stop_on_success=False):
-    """One search (the compare loop); returns (best genome, family, facts)."""
+def search(task, family: str, seed: int, budget: int, stop_on_success=False, **overrides):
+    """One search (the compare loop) with the family's creature options, updated by
+    ``overrides``; returns (best genome, family, facts)."""
     from gpmotion.families import make_family
     from gpmotion.inprocess import InProcessEvaluator
     from gpmotion.replay import replay_genome
-    fam = make_family(family, task, **options(task.name).get(family, {}))
+    fam = make_family(family, task, **{**options(task.name).get(family, {}), **overrides})
     s = fam.make_search(seed, n_working=10, n_generations=max(1, budget // 10 - 1))
     ev = InProcessEvaluator(task, fam, actuation=ACTUATION)
     evals, first, t0, c0 = 0, None, time.perf_counter(), time.process_time()
@@ -92,7 +103,7 @@ def search(task, family: str, seed: int, budget: int, stop_on_success=False):
     traj, costs, measures, ok = replay_genome(task, fam, ACTUATION, best)
     facts = {"evaluations": evals, "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
              "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
-             "describe": task.describe(traj, measures)}
+             "describe": task.describe(traj, measures), "options": dict(fam.options)}
     return best, fam, facts
 
 
@@ -107,12 +118,13 @@ def sequence(a) -> int:
     for name, task_name, after in stages:
         prior = ",".join(str(paths[p]) for p in after.split(",") if p)
         task = gpmotion.get_task(task_name, after=prior)
-        best, fam, facts = search(task, "bsr-time", a.seed, a.budget)
+        best, fam, facts = search(task, "bsr-time", a.seed, a.budget,
+                                  **({} if a.t_per is None else {"t_per": a.t_per}))
         paths[name] = out / f"{name}.json"
         save_controller(paths[name], task, best, family=fam, actuation=ACTUATION, seed=a.seed)
         report[name] = facts
-        print(f"{name}: {facts['describe'][0]}  ({facts['evaluations']} evaluations, "
-              f"{facts['wall_s']:.0f} s)", flush=True)
+        print(f"{name} (t_per {fam.options['t_per']} s): {facts['describe'][0]}  "
+              f"({facts['evaluations']} evaluations, {facts['wall_s']:.0f} s)", flush=True)
     comp = composite.from_controllers([paths[n] for n, _, _ in stages], names=[n for n, _, _ in stages])
     traj, bounds = composite.run(comp)
     from gpmotion.tasks._creature3d import creature_measures
@@ -133,7 +145,8 @@ def sequence(a) -> int:
     report["composite"] = {"walk_m": float(parts[0]["distance"][0]),
                            "turn_deg": float(np.degrees(parts[1]["turn"][0])),
                            "walk2_m": float(parts[2]["distance"][0]),
-                           "fell": [bool(p["fall"][0] > 0) for p in parts], "completes": bool(done)}
+                           "fell": [bool(p["fall"][0] > 0) for p in parts], "completes": bool(done),
+                           "t_per": [report[n]["options"]["t_per"] for n, _, _ in stages]}
     print(json.dumps(report["composite"]))
     (out / "sequence.json").write_text(json.dumps(report, indent=2, default=str))
     return 0
@@ -236,6 +249,8 @@ def main(argv=None) -> int:
     s = sub.add_parser("sequence")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--budget", type=int, default=3000)
+    s.add_argument("--t-per", type=seconds, metavar="SECONDS",
+                   help="time-based BSR t_per of all three stages (default: FAMILY_OPTIONS')")
     s.add_argument("--out")
     v = sub.add_parser("speed")
     v.add_argument("--seed", type=int, default=0)
