@@ -400,8 +400,13 @@ def test_touch_v3_touches_the_left_elbow_with_the_right_arm_alone(herman):
     assert tuple(get_task("herman_touch-v3", site="elbow_l").controlled) == ARM
     assert tuple(get_task("herman_touch-v2", site="elbow_l").controlled) == ARM + LEFT_ARM
     assert tuple(get_task("herman_touch-v3", site="hand_l").controlled) == ARM + LEFT_ARM
-    m = get_task("herman_touch-v3", site="elbow_l").measure(_still(herman, pose_q(herman, **AROUND)))
+    v3 = get_task("herman_touch-v3", site="elbow_l")
+    m = v3.measure(_still(herman, pose_q(herman, **AROUND)))
     assert m["touch_end"][0] < 0.005 and m["crossing"][0] < 0.005 and m["through"][0] == 0.0
+    # a fixed target on the held body, as the nose: its recipe
+    assert (v3.gp_targets, v3.params["w_rest"]) == ("angle", 1.0)
+    assert (get_task("herman_touch-v3", site="knee_l").gp_targets,
+            get_task("herman_touch-v2", site="elbow_l").gp_targets) == ("rate", "rate")
 
 
 def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
@@ -414,11 +419,15 @@ def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
     assert m2["touch_end"][0] < 0.005 and v2.success(tr, m2)[0]
     assert m3["crossing"][0] > 0.1 and not v3.success(tr, m3)[0]
     assert m3["through"][0] > m2["through"][0] > 0.0     # whole capsules, not two points
+    # v2's value plus the capsules' excess over CROSSING: a motion that never
+    # crosses by more than that scores as under v2
+    from gpmotion.tasks._herman import limbs_overlap, limbs_through_torso as capsules
+    assert m3["through"][0] == pytest.approx(
+        m2["through"][0] + capsules(limbs_overlap(tr), herman, CROSSING)[0])
     # resting on the belly (within CROSSING) costs nothing
     overlap = np.full(tr.q.shape[:2], CROSSING * 0.9)
-    from gpmotion.tasks._herman import limbs_through_torso
-    assert limbs_through_torso(overlap, herman, CROSSING)[0] == 0.0
-    assert limbs_through_torso(overlap + 0.02, herman, CROSSING)[0] > 1.0
+    assert capsules(overlap, herman, CROSSING)[0] == 0.0
+    assert capsules(overlap + 0.02, herman, CROSSING)[0] > 1.0
 
 
 def test_touch_site_measures_the_distance_to_that_site(herman):
