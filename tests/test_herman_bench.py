@@ -49,3 +49,16 @@ def test_benchmark_names_every_task_and_preset_of_the_bar_and_refuses_unknown(be
         get_task(task, **params)                             # each builds
     assert bench.main(["--only", "bogus", "--out", str(tmp_path / "x.jsonl")]) == 2
     assert "bogus" in capsys.readouterr().err
+
+
+def test_benchmark_measures_how_far_a_saved_controller_crosses_the_trunk(bench, tmp_path):
+    """crossing_cm replays best.json and takes limbs_overlap's deepest frame."""
+    from gpmotion.replay import load_controller, replay_genome
+    from gpmotion.run import RunConfig, run
+    from gpmotion.tasks._herman import limbs_overlap
+    out = tmp_path / "run"
+    run(RunConfig(task="herman_touch", seed=0, params={"seconds": 0.3},
+                  search={"population": 8, "generations": 1}), out, quiet=True, artifacts=False)
+    task, fam, act, genome, _ = load_controller(out / "best.json")
+    traj = replay_genome(task, fam, act, genome)[0]
+    assert bench._crossing(out / "best.json") == float(limbs_overlap(traj).max()) >= 0.0
