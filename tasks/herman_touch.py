@@ -24,8 +24,8 @@ import numpy as np
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
-                                    limbs_overlap, limbs_through_torso, rest_scaled, site_at_rest, style_measures, style_terms,
-                                    tail)
+                                    limbs_overlap, limbs_through_torso, rest_scaled, site_at_rest,
+                                    style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
 CROSSING = 0.01         # m: v3 allows the forearm this far into the trunk, in its style term and
@@ -185,7 +185,6 @@ class HermanTouchV2(HermanTouch):
         super().__init__(**overrides)
         if angle:
             self.gp_targets, self.gp_defaults = self.ANGLE["gp_targets"], self.ANGLE["gp_defaults"]
-
 
 
 @register_task
