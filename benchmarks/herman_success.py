@@ -7,9 +7,10 @@ motion that has come to rest (tasks/_herman.py: REST_SPEED, SETTLE).
 Each run is one line of ``--out`` (JSON lines: config, seed, success, wall
 time, CPU time, the load average when it started, the best controller's
 facts, and ``crossing_cm``: how far its right forearm or hand goes into the
-trunk at the deepest, a check on every task, whatever it scores).  On a loaded machine the wall time says little.  ``cpu_s`` is the
-process's CPU time (user + system, numba's threads included); ``main_cpu_s``
-the main thread's alone, which estimates the run's wall time on a quiet
+trunk at the deepest, a check on every task, whatever it scores).  On a
+loaded machine the wall time says little.  ``cpu_s`` is the process's CPU
+time (user + system, numba's threads included); ``main_cpu_s`` the main
+thread's alone, which estimates the run's wall time on a quiet
 2-core machine: numba's OpenMP pool runs every rollout batch on the main
 thread and one worker, each taking half the episodes, so the main thread
 works through all the serial Python plus half of every batch (it does not
