@@ -431,7 +431,8 @@ def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
 
 
 def test_touch_site_measures_the_distance_to_that_site(herman):
-    task = get_task("herman_touch", site="chest")
+    # v2: this IK pose lays the forearm into the trunk, which v3 refuses (its own tests above)
+    task = get_task("herman_touch-v2", site="chest")
     chest = _site(herman, herman.q_default, "chest")
     angles, miss = reach(herman, "fingertip_r", chest + [0.02, 0.0, 0.0],
                          x0=[-0.8, 0.3, 0.0, 1.5, 0.0, 0.0])
