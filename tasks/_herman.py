@@ -196,6 +196,50 @@ def limbs_through_torso(overlap, fig, allow: float) -> np.ndarray:
     return (excess > 0).mean(axis=1) + np.minimum(excess.max(axis=1) / r, 1.0)
 
 
+# A forearm resting on the belly overlaps the trunk's cylinder a little
+# (capsules are rounder than a body); beyond this it has gone through.
+CROSSING = 0.01            # m
+
+
+class TrunkCheck:
+    """Mixin for a task version whose right forearm may not cross the trunk
+    (list it before the task's class: ``class V(TrunkCheck, HermanX)``).
+
+    Herman has no self-collision, and v1's ``through`` watched the hand and
+    fingertip sites alone, so a forearm could pass through the trunk with
+    both outside (session 15: 3 of touch_nose's 4 successes did).  The
+    checked version adds ``limbs_through_torso`` of the forearm's and hand's
+    capsules to ``through`` (so a population that never crosses is scored as
+    before), measures ``crossing`` (the deepest overlap, m) and requires it
+    ≤ CROSSING for success.  Its class body sets ``terms`` and
+    ``success_threshold`` with ``checked_terms`` and ``checked_threshold``."""
+
+    def measure(self, traj):
+        overlap = limbs_overlap(traj)
+        m = super().measure(traj)
+        return {**m, "through": m["through"] + limbs_through_torso(overlap, traj.figure, CROSSING),
+                "crossing": overlap.max(axis=1)}
+
+    def reached(self, traj, m):
+        return super().reached(traj, m) & (m["crossing"] <= CROSSING)
+
+    def describe(self, traj, m):
+        return [*super().describe(traj, m),
+                f"forearm and hand at most {m['crossing'][0] * 100:.1f} cm into the trunk"]
+
+
+def checked_terms(terms) -> tuple[Term, ...]:
+    """``terms`` with the ``through`` term's doc saying what TrunkCheck adds."""
+    return tuple(replace(t, doc=f"{t.doc}; + the same for the right forearm's and hand's capsules "
+                                f"overlapping it by more than {CROSSING * 100:.0f} cm")
+                 if t.name == "through" else t for t in terms)
+
+
+def checked_threshold(threshold: str) -> str:
+    return (f"{threshold}; forearm and hand never more than {CROSSING * 100:.0f} cm into the "
+            f"trunk's cylinder")
+
+
 def posture(traj, controlled=ARM):
     """Mean over frames of the RMS deviation of the PD-held joints from neutral (rad)."""
     fig = traj.figure

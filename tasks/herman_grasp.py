@@ -25,8 +25,8 @@ from gpmotion.model import make_scene
 from gpmotion.sim import geometry3d
 from gpmotion.sim.grip3d import object_params
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, style_measures,
-                                    style_terms)
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+                                    checked_terms, checked_threshold, style_measures, style_terms)
 
 MASS, RADIUS = 0.2, 0.03                 # kg, m: the ball
 BALL = (0.35, -0.22, -0.05)              # its start in the pelvis frame (m): fore, left, up
@@ -127,3 +127,13 @@ class HermanGrasp(HermanTask):
         when = f"at {traj.times[g.argmax()]:.2f} s" if g.any() else "never"
         return [f"ball gripped {when}; lifted {m['lift'][0] * 100:.1f} cm (goal {self.params['lift'] * 100:.0f} cm)",
                 f"fingertip speed over the last 0.1 s ≤ {m['end_speed'][0] * 100:.1f} cm/s"]
+
+
+@register_task
+class HermanGraspV2(TrunkCheck, HermanGrasp):
+    """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
+    v1's seed 0 did not cross; the check is on every Herman task).
+    docs/notes/herman.md, session 16."""
+    version = 2
+    terms = checked_terms(HermanGrasp.terms)
+    success_threshold = checked_threshold(HermanGrasp.success_threshold)

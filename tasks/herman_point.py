@@ -12,8 +12,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (REST_RULE, HermanTask, goal_scene, pose_q, site_at_rest,
-                                    style_measures, style_terms)
+from gpmotion.tasks._herman import (REST_RULE, HermanTask, TrunkCheck, checked_terms, checked_threshold,
+                                    goal_scene, pose_q, site_at_rest, style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
 
@@ -93,3 +93,13 @@ class HermanPoint(HermanTask):
         return [f"pointing error {np.degrees(m['aim'][0]):.1f}° over the last third "
                 f"(target az {self.params['azimuth']:.0f}°, el {self.params['elevation']:.0f}°)",
                 f"arm at the end: az {az:.0f}°, el {el:.0f}°, reach {np.linalg.norm(v):.2f} m"]
+
+
+@register_task
+class HermanPointV2(TrunkCheck, HermanPoint):
+    """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
+    v1's seed 0 did not cross; the check is on every
+    Herman task).  docs/notes/herman.md, session 16."""
+    version = 2
+    terms = checked_terms(HermanPoint.terms)
+    success_threshold = checked_threshold(HermanPoint.success_threshold)

@@ -19,7 +19,8 @@ import numpy as np
 
 from gpmotion.model import make_scene
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, MAIN_WEIGHT, TERMINALS
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, TrunkCheck, checked_terms,
+                                    checked_threshold)
 from gpmotion.tasks.herman_touch_object import HermanTouchObject
 
 FELL = 0.20            # m: the pelvis dropped this much
@@ -87,3 +88,13 @@ class HermanReachStandingV2(HermanReachStanding):
     dt = 2e-3
     record_every = 5
     gp_defaults = HermanTouchObject.gp_defaults
+
+
+@register_task
+class HermanReachStandingV3(TrunkCheck, HermanReachStandingV2):
+    """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
+    session 15 found v2's seed 0 with the forearm 8.3 cm
+    into the trunk).  docs/notes/herman.md, session 16."""
+    version = 3
+    terms = checked_terms(HermanReachStandingV2.terms)
+    success_threshold = checked_threshold(HermanReachStandingV2.success_threshold)

@@ -17,20 +17,15 @@ over the last 0.5 s (the finger should arrive and stay).  Success: within
 points as every Herman task.  ``herman_touch_nose`` is this task with the
 site fixed to the nose.
 """
-from dataclasses import replace
-
 import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene,
-                                    limbs_overlap, limbs_through_torso, rest_scaled, site_at_rest,
-                                    style_measures, style_terms, tail)
+from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask,
+                                    TrunkCheck, checked_terms, checked_threshold, goal_scene,
+                                    rest_scaled, site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
-CROSSING = 0.01         # m: v3 allows the forearm this far into the trunk, in its style term and
-                        # its success (capsules are rounder than a body: a forearm resting on the
-                        # belly overlaps a little)
 HOLD = 0.5              # s: the window of the averaged distance
 WAIST = ("waist_y", "waist_x", "waist_z")
 LEFT_ARM = ("shoulder_l_y", "shoulder_l_z", "shoulder_l_x", "elbow_l", "wrist_l_y", "wrist_l_x")
@@ -188,17 +183,13 @@ class HermanTouchV2(HermanTouch):
 
 
 @register_task
-class HermanTouchV3(HermanTouchV2):
+class HermanTouchV3(TrunkCheck, HermanTouchV2):
     """v3: the forearm may not cross the trunk, and the left elbow is touched
     by the right arm alone.
 
     * A right-arm run touched the left elbow with its forearm through the
       trunk (12.5 cm of capsule overlap) while the hand and fingertip, all
-      that ``through`` watched, stayed outside.  v3's ``through`` adds the
-      right forearm's and hand's capsules overlapping the trunk's cylinder
-      by more than CROSSING (``limbs_through_torso``) to v2's value, so a
-      population that never crosses is scored as under v2; success needs the
-      overlap ≤ CROSSING.
+      that ``through`` watched, stayed outside: ``_herman.TrunkCheck``.
     * The right arm reaches the left elbow around the front of the trunk
       (least squares, capsules apart: tests/test_herman.py), so the left arm
       stays held (``RIGHT_ARM_REACHES``): under v2 both arms were under GP
@@ -207,26 +198,10 @@ class HermanTouchV3(HermanTouchV2):
       is, and takes the nose's recipe (``ANGLE_SITES``).
     docs/notes/herman.md, session 15."""
     version = 3
-    success_threshold = (f"{HermanTouchV2.success_threshold}; forearm and hand never more than "
-                         f"{CROSSING * 100:.0f} cm into the trunk's cylinder")
+    success_threshold = checked_threshold(HermanTouchV2.success_threshold)
     RIGHT_ARM_REACHES = ("elbow_l",)    # left-arm sites: tests/test_herman.py
     ANGLE_SITES = ("nose", "elbow_l")
-    terms = tuple(replace(t, doc=f"{t.doc}; + the same for the right forearm's and hand's capsules "
-                                 f"overlapping it by more than {CROSSING * 100:.0f} cm")
-                  if t.name == "through" else t for t in HermanTouchV2.terms)
+    terms = checked_terms(HermanTouchV2.terms)
 
     def _joints(self, f, site):
         return ARM if site in self.RIGHT_ARM_REACHES else super()._joints(f, site)
-
-    def measure(self, traj):
-        overlap = limbs_overlap(traj)
-        m = super().measure(traj)
-        return {**m, "through": m["through"] + limbs_through_torso(overlap, traj.figure, CROSSING),
-                "crossing": overlap.max(axis=1)}
-
-    def reached(self, traj, m):
-        return super().reached(traj, m) & (m["crossing"] <= CROSSING)
-
-    def describe(self, traj, m):
-        return [*super().describe(traj, m),
-                f"forearm and hand at most {m['crossing'][0] * 100:.1f} cm into the trunk"]

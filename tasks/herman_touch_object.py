@@ -16,7 +16,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, on_limits,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+                                    checked_terms, checked_threshold, goal_scene, on_limits,
                                     rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -128,3 +129,13 @@ class HermanTouchObjectV2(HermanTouchObject):
     same they solved 2 / 3 and 0 / 3, session 13); docs/notes/herman.md."""
     version = 2
     preset_weights = {1: {"w_limits": 2.0, "w_rest": 3.0}}
+
+
+@register_task
+class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
+    """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
+    session 15 found v2's seed 0 on target 0 with the forearm 8.0 cm
+    into the belly, on target 1 5.8 cm).  docs/notes/herman.md, session 16."""
+    version = 3
+    terms = checked_terms(HermanTouchObjectV2.terms)
+    success_threshold = checked_threshold(HermanTouchObjectV2.success_threshold)

@@ -20,7 +20,8 @@ Style points as every Herman arm task.
 import numpy as np
 
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, goal_scene, site_at_rest,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+                                    checked_terms, checked_threshold, goal_scene, site_at_rest,
                                     style_measures, style_terms)
 
 ABOVE = 0.05          # m above the shoulder counts as "raised"
@@ -115,3 +116,13 @@ class HermanWave(HermanTask):
         p = wave_parts(traj.episode(0))
         return [f"hand raised {m['raised'][0] * 100:.0f}% of the wave window; "
                 f"{int(m['passes'][0])} lateral swings spanning {p['spread_m'][0] * 100:.0f} cm"]
+
+
+@register_task
+class HermanWaveV2(TrunkCheck, HermanWave):
+    """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
+    v1's seed 0 touched it, 0.7 cm, within the allowance;
+    the check is on every Herman task).  docs/notes/herman.md, session 16."""
+    version = 2
+    terms = checked_terms(HermanWave.terms)
+    success_threshold = checked_threshold(HermanWave.success_threshold)

@@ -23,7 +23,7 @@ RUNS = {
                                 "--generations", "60", "--param", "seconds=1"],
     "starman_travel-bsr-sense": ["starman_travel", "--controller", "bsr-sense", "--seed", "4",
                                  "--generations", "60", "--param", "seconds=1"],
-    "herman_touch_nose-gp": ["herman_touch_nose", "--seed", "0", "--generations", "2",
+    "herman_touch_nose-gp": ["herman_touch_nose-v1", "--seed", "0", "--generations", "2",
                              "--population", "20"],
 }
 

@@ -412,7 +412,7 @@ def test_touch_v3_touches_the_left_elbow_with_the_right_arm_alone(herman):
 def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
     """ACROSS touches the left elbow with the right forearm through the trunk:
     v2 judged it a success, v3 charges its through term and fails it."""
-    from gpmotion.tasks.herman_touch import CROSSING
+    from gpmotion.tasks._herman import CROSSING
     tr = _still(herman, pose_q(herman, **ACROSS))
     v2, v3 = (get_task(v, site="elbow_l") for v in ("herman_touch-v2", "herman_touch-v3"))
     m2, m3 = v2.measure(tr), v3.measure(tr)
@@ -445,8 +445,8 @@ def test_touch_site_measures_the_distance_to_that_site(herman):
 
 def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
     from gpmotion.families import make_family
-    v1, v2, nose = (get_task(t, site="knee_l") if t != "herman_touch_nose" else get_task(t)
-                    for t in ("herman_touch-v1", "herman_touch-v2", "herman_touch_nose"))
+    v1, v2, nose = (get_task(t, site="knee_l") if t != "herman_touch_nose-v1" else get_task(t)
+                    for t in ("herman_touch-v1", "herman_touch-v2", "herman_touch_nose-v1"))
     assert v2.id == "herman_touch-v2" and v1.params == {"site": "knee_l", "seconds": 1.5}
     rest = {t.id: {x.name: x.weight for x in t.terms}["rest"] for t in (v1, v2, nose)}
     assert rest == {"herman_touch-v1": pytest.approx(3.0), "herman_touch-v2": pytest.approx(9.0),
@@ -538,3 +538,37 @@ def test_a_held_ball_adds_its_weight_times_its_lever_to_the_shoulder_torque():
     assert ball > 7.0
     arm = _gravity_torque(plain, q, "shoulder_r_y")                          # same pose, no ball
     assert -servo == pytest.approx(arm + ball, rel=1e-4)
+
+
+HERMAN_TASKS = ("herman_touch", "herman_touch_nose", "herman_touch_object", "herman_point",
+                "herman_wave", "herman_reach_standing", "herman_grasp")
+
+
+@pytest.mark.parametrize("name", HERMAN_TASKS)
+def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch):
+    """The newest version of every Herman task carries TrunkCheck (session 15:
+    forearms crossed the trunk on touch_nose, touch_object and reach_standing):
+    on the ACROSS pose its ``through`` is the previous version's plus the
+    capsules' excess, and it fails a motion its previous version's own test
+    passes."""
+    from gpmotion.task import task_class
+    from gpmotion.tasks._herman import CROSSING, TrunkCheck, limbs_overlap, limbs_through_torso
+    new = get_task(name)
+    old = get_task(f"{name}-v{new.version - 1}")
+    assert isinstance(new, TrunkCheck) and not isinstance(old, TrunkCheck)
+    assert "trunk" in new.success_threshold and "trunk" not in old.success_threshold
+    from gpmotion.controllers import schedule
+    from gpmotion.sim.rollout import rollout
+    fig = new.figure
+    # a real rollout of the task's scene (the grasp's ball too), held at ACROSS
+    base = rollout(fig, new.scene(), schedule.constant(fig.model.neutral), n_steps=new.n_steps,
+                   dt=new.dt, record_every=new.record_every)
+    tr = replace(base, q=np.broadcast_to(pose_q(fig, **ACROSS), base.q.shape).copy(),
+                 qd=np.zeros_like(base.qd))
+    m_new, m_old = new.measure(tr), old.measure(tr)
+    assert m_new["crossing"][0] > 0.1
+    assert m_new["through"][0] == pytest.approx(
+        m_old["through"][0] + limbs_through_torso(limbs_overlap(tr), fig, CROSSING)[0])
+    # with the previous version's own test passed, only the check refuses it
+    monkeypatch.setattr(task_class(old.id), "reached", lambda self, traj, m: np.ones(1, bool))
+    assert old.reached(tr, m_old)[0] and not new.reached(tr, m_new)[0]
