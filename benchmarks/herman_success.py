@@ -68,6 +68,9 @@ EXTRA = {   # not in the bar; --only names them
     # the versions before the forearm check, as controls (session 16)
     "point/v1": ("herman_point-v1", {}),
     "wave/v1": ("herman_wave-v1", {}),
+    "grasp/v1": ("herman_grasp-v1", {}),
+    "touch_object/1/v2": ("herman_touch_object-v2", {"target": 1}),
+    "reach_standing/v2": ("herman_reach_standing-v2", {}),
 }
 
 

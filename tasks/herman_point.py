@@ -103,3 +103,14 @@ class HermanPointV2(TrunkCheck, HermanPoint):
     version = 2
     terms = checked_terms(HermanPoint.terms)
     success_threshold = checked_threshold(HermanPoint.success_threshold)
+
+
+@register_task
+class HermanPointV3(TrunkCheck, HermanPoint):
+    """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
+    cost and the search are v1's, success also needs the forearm out of the
+    trunk.  Session 16, 5 seeds: v2 (charged) 2 / 5, v1's search 4 / 5, whose best controllers
+    crossed at most 0.7 cm (allowed: 1); docs/notes/herman.md."""
+    version = 3
+    charge = False
+    success_threshold = checked_threshold(HermanPoint.success_threshold)

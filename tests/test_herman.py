@@ -548,13 +548,14 @@ HERMAN_TASKS = ("herman_touch", "herman_touch_nose", "herman_touch_object", "her
 def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch):
     """The newest version of every Herman task carries TrunkCheck (session 15:
     forearms crossed the trunk on touch_nose, touch_object and reach_standing):
-    on the ACROSS pose its ``through`` is the previous version's plus the
-    capsules' excess, and it fails a motion its previous version's own test
-    passes."""
+    on the ACROSS pose its ``through`` is the last unchecked version's plus the
+    capsules' excess (or, where the check only judges, ``charge = False``,
+    the same cost), and it fails a motion that version's own test passes."""
     from gpmotion.task import task_class
     from gpmotion.tasks._herman import CROSSING, TrunkCheck, limbs_overlap, limbs_through_torso
     new = get_task(name)
-    old = get_task(f"{name}-v{new.version - 1}")
+    old = next(t for t in (get_task(f"{name}-v{v}") for v in range(new.version - 1, 0, -1))
+               if not isinstance(t, TrunkCheck))        # the last version without the check
     assert isinstance(new, TrunkCheck) and not isinstance(old, TrunkCheck)
     assert "trunk" in new.success_threshold and "trunk" not in old.success_threshold
     from gpmotion.controllers import schedule
@@ -567,8 +568,13 @@ def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch
                  qd=np.zeros_like(base.qd))
     m_new, m_old = new.measure(tr), old.measure(tr)
     assert m_new["crossing"][0] > 0.1
-    assert m_new["through"][0] == pytest.approx(
-        m_old["through"][0] + limbs_through_torso(limbs_overlap(tr), fig, CROSSING)[0])
+    # charged: the capsules' excess added to through; judged only: the old cost, term for term
+    extra = limbs_through_torso(limbs_overlap(tr), fig, CROSSING)[0] if new.charge else 0.0
+    assert m_new["through"][0] == pytest.approx(m_old["through"][0] + extra)
+    if not new.charge:
+        assert [(t.name, t.weight, t.phase) for t in new.terms] == \
+            [(t.name, t.weight, t.phase) for t in old.terms]
+        assert new.score(tr)[0][0] == old.score(tr)[0][0]
     # with the previous version's own test passed, only the check refuses it
     monkeypatch.setattr(task_class(old.id), "reached", lambda self, traj, m: np.ones(1, bool))
     assert old.reached(tr, m_old)[0] and not new.reached(tr, m_new)[0]
