@@ -217,8 +217,8 @@ class TrunkCheck:
     ``charge = False`` judges the crossing without charging it: the cost,
     and so the search, stay the previous version's.  For tasks whose
     searches do not cross anyway and which charging made worse (session 16:
-    point 4 / 5 -> 2 / 5, wave 5 / 5 -> 1 / 5; their previous versions' best
-    controllers crossed at most 0.7 cm in 5 seeds)."""
+    point 4 / 5 -> 2 / 5, wave 5 / 5 -> 1 / 5, grasp 5 / 5 -> 4 / 5; their
+    v1 best controllers crossed at most 0.7 cm in 5 seeds)."""
     charge = True
 
     def measure(self, traj):

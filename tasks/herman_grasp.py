@@ -137,3 +137,14 @@ class HermanGraspV2(TrunkCheck, HermanGrasp):
     version = 2
     terms = checked_terms(HermanGrasp.terms)
     success_threshold = checked_threshold(HermanGrasp.success_threshold)
+
+
+@register_task
+class HermanGraspV3(TrunkCheck, HermanGrasp):
+    """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
+    cost and the search are v1's, success also needs the forearm out of the
+    trunk.  Session 16, 5 seeds: v2 (charged) 4 / 5, v1's search 5 / 5, whose
+    best controllers never crossed (0.0 cm); docs/notes/herman.md."""
+    version = 3
+    charge = False
+    success_threshold = checked_threshold(HermanGrasp.success_threshold)
