@@ -109,8 +109,9 @@ class HermanPointV2(TrunkCheck, HermanPoint):
 class HermanPointV3(TrunkCheck, HermanPoint):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
-    trunk.  Session 16, 5 seeds: v2 (charged) 2 / 5, v1's search 4 / 5, whose best controllers
-    crossed at most 0.7 cm (allowed: 1); docs/notes/herman.md."""
+    trunk.  Session 16, 5 seeds: v2 (charged) 2 / 5, v1's search 4 / 5,
+    whose best controllers crossed at most 0.7 cm (allowed: 1);
+    docs/notes/herman.md."""
     version = 3
     charge = False
     success_threshold = checked_threshold(HermanPoint.success_threshold)

@@ -132,8 +132,9 @@ class HermanWaveV2(TrunkCheck, HermanWave):
 class HermanWaveV3(TrunkCheck, HermanWave):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
-    trunk.  Session 16, 5 seeds: v2 (charged) 1 / 5, v1's search 5 / 5, whose best controllers
-    crossed at most 0.7 cm (allowed: 1); docs/notes/herman.md."""
+    trunk.  Session 16, 5 seeds: v2 (charged) 1 / 5, v1's search 5 / 5,
+    whose best controllers crossed at most 0.7 cm (allowed: 1);
+    docs/notes/herman.md."""
     version = 3
     charge = False
     success_threshold = checked_threshold(HermanWave.success_threshold)
