@@ -211,8 +211,8 @@ class TrunkCheck:
     checked version adds ``limbs_through_torso`` of the forearm's and hand's
     capsules to ``through`` (so a population that never crosses is scored as
     before), measures ``crossing`` (the deepest overlap, m) and requires it
-    ≤ CROSSING for success.  Its class body sets ``terms`` and
-    ``success_threshold`` with ``checked_terms`` and ``checked_threshold``.
+    ≤ CROSSING for success.  The version listing TrunkCheck gets its
+    ``success_threshold`` and ``through`` doc derived (``__init_subclass__``).
 
     ``charge = False`` judges the crossing without charging it: the cost,
     and so the search, stay the previous version's.  For tasks whose
@@ -220,6 +220,13 @@ class TrunkCheck:
     point 4 / 5 -> 2 / 5, wave 5 / 5 -> 1 / 5, grasp 5 / 5 -> 4 / 5; their
     v1 best controllers crossed at most 0.7 cm in 5 seeds)."""
     charge = True
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if TrunkCheck in cls.__bases__:        # the version that adds the check, once
+            cls.success_threshold = checked_threshold(cls.success_threshold)
+            if cls.charge:
+                cls.terms = checked_terms(cls.terms)
 
     def measure(self, traj):
         overlap = limbs_overlap(traj)

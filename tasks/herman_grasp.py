@@ -26,7 +26,7 @@ from gpmotion.sim import geometry3d
 from gpmotion.sim.grip3d import object_params
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
-                                    checked_terms, checked_threshold, style_measures, style_terms)
+                                    style_measures, style_terms)
 
 MASS, RADIUS = 0.2, 0.03                 # kg, m: the ball
 BALL = (0.35, -0.22, -0.05)              # its start in the pelvis frame (m): fore, left, up
@@ -135,8 +135,6 @@ class HermanGraspV2(TrunkCheck, HermanGrasp):
     v1's seed 0 did not cross; the check is on every Herman task).
     docs/notes/herman.md, session 16."""
     version = 2
-    terms = checked_terms(HermanGrasp.terms)
-    success_threshold = checked_threshold(HermanGrasp.success_threshold)
 
 
 @register_task
@@ -147,4 +145,3 @@ class HermanGraspV3(TrunkCheck, HermanGrasp):
     best controllers never crossed (0.0 cm); docs/notes/herman.md."""
     version = 3
     charge = False
-    success_threshold = checked_threshold(HermanGrasp.success_threshold)

@@ -12,7 +12,7 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (REST_RULE, HermanTask, TrunkCheck, checked_terms, checked_threshold,
+from gpmotion.tasks._herman import (REST_RULE, HermanTask, TrunkCheck,
                                     goal_scene, pose_q, site_at_rest, style_measures, style_terms)
 
 WEIGHT = 5.0            # a cost of 1 per 11.5° (roulette needs costs of order 1; see _herman)
@@ -101,8 +101,6 @@ class HermanPointV2(TrunkCheck, HermanPoint):
     v1's seed 0 did not cross; the check is on every
     Herman task).  docs/notes/herman.md, session 16."""
     version = 2
-    terms = checked_terms(HermanPoint.terms)
-    success_threshold = checked_threshold(HermanPoint.success_threshold)
 
 
 @register_task
@@ -114,4 +112,3 @@ class HermanPointV3(TrunkCheck, HermanPoint):
     docs/notes/herman.md."""
     version = 3
     charge = False
-    success_threshold = checked_threshold(HermanPoint.success_threshold)

@@ -19,8 +19,7 @@ import numpy as np
 
 from gpmotion.model import make_scene
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, TrunkCheck, checked_terms,
-                                    checked_threshold)
+from gpmotion.tasks._herman import GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, TrunkCheck
 from gpmotion.tasks.herman_touch_object import HermanTouchObject
 
 FELL = 0.20            # m: the pelvis dropped this much
@@ -96,5 +95,3 @@ class HermanReachStandingV3(TrunkCheck, HermanReachStandingV2):
     session 15 found v2's seed 0 with the forearm 8.3 cm
     into the trunk).  docs/notes/herman.md, session 16."""
     version = 3
-    terms = checked_terms(HermanReachStandingV2.terms)
-    success_threshold = checked_threshold(HermanReachStandingV2.success_threshold)

@@ -22,7 +22,7 @@ import numpy as np
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask,
-                                    TrunkCheck, checked_terms, checked_threshold, goal_scene,
+                                    TrunkCheck, goal_scene,
                                     rest_scaled, site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
@@ -198,10 +198,8 @@ class HermanTouchV3(TrunkCheck, HermanTouchV2):
       is, and takes the nose's recipe (``ANGLE_SITES``).
     docs/notes/herman.md, session 15."""
     version = 3
-    success_threshold = checked_threshold(HermanTouchV2.success_threshold)
     RIGHT_ARM_REACHES = ("elbow_l",)    # left-arm sites: tests/test_herman.py
     ANGLE_SITES = ("nose", "elbow_l")
-    terms = checked_terms(HermanTouchV2.terms)
 
     def _joints(self, f, site):
         return ARM if site in self.RIGHT_ARM_REACHES else super()._joints(f, site)

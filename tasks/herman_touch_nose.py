@@ -10,7 +10,7 @@ points, phased in: keep the hand out of the torso, disturb the held joints
 little, spend little work, end at rest.
 """
 from gpmotion.task import register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, TrunkCheck, checked_terms, checked_threshold
+from gpmotion.tasks._herman import GP_DEFAULTS, TrunkCheck
 from gpmotion.tasks.herman_touch import HermanTouch
 
 
@@ -36,5 +36,3 @@ class HermanTouchNoseV2(TrunkCheck, HermanTouchNose):
     session 15 found 3 of v1's 4 successes on 5 seeds passing the forearm
     through the chest, by 1.2, 4.6 and 11.3 cm).  docs/notes/herman.md, session 16."""
     version = 2
-    terms = checked_terms(HermanTouchNose.terms)
-    success_threshold = checked_threshold(HermanTouchNose.success_threshold)

@@ -17,7 +17,7 @@ import numpy as np
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
-                                    checked_terms, checked_threshold, goal_scene, on_limits,
+                                    goal_scene, on_limits,
                                     rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -137,5 +137,3 @@ class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
     session 15 found v2's seed 0 on target 0 with the forearm 8.0 cm
     into the belly, on target 1 5.8 cm).  docs/notes/herman.md, session 16."""
     version = 3
-    terms = checked_terms(HermanTouchObjectV2.terms)
-    success_threshold = checked_threshold(HermanTouchObjectV2.success_threshold)

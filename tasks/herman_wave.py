@@ -21,7 +21,7 @@ import numpy as np
 
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
-                                    checked_terms, checked_threshold, goal_scene, site_at_rest,
+                                    goal_scene, site_at_rest,
                                     style_measures, style_terms)
 
 ABOVE = 0.05          # m above the shoulder counts as "raised"
@@ -124,8 +124,6 @@ class HermanWaveV2(TrunkCheck, HermanWave):
     v1's seed 0 touched it, 0.7 cm, within the allowance;
     the check is on every Herman task).  docs/notes/herman.md, session 16."""
     version = 2
-    terms = checked_terms(HermanWave.terms)
-    success_threshold = checked_threshold(HermanWave.success_threshold)
 
 
 @register_task
@@ -137,4 +135,3 @@ class HermanWaveV3(TrunkCheck, HermanWave):
     docs/notes/herman.md."""
     version = 3
     charge = False
-    success_threshold = checked_threshold(HermanWave.success_threshold)
