@@ -520,3 +520,18 @@ def test_beryl_can_tuck():
     pts = geometry.points_world(m, geometry.link_poses(m, q[None]), m.cp_link, m.cp_pos)[0]
     z = dict(zip(fig.contact_names, pts[:, 1]))
     assert z["knee_l"] > z["hip"] + 0.25 and z["knee_r"] > z["hip"] + 0.25
+
+
+def test_bsr_variation_uses_the_c_librarys_exp_bit_for_bit():
+    """numpy's float64 exp has its own SIMD path on AVX-512 machines that
+    rounds some results differently from the C library's: genome.exp goes
+    element by element through math.exp, so a seed breeds the same genome on
+    every machine (session 17: a golden run's tau differed by one ulp)."""
+    from gpmotion.bsr.genome import exp, log_uniform
+    x = np.random.default_rng(0).normal(0.0, 3.0, (7, 5))
+    assert [float(v) for v in exp(x).ravel()] == [math.exp(v) for v in x.ravel().tolist()]
+    assert exp(x).shape == x.shape and exp(0.5).shape == ()
+    rng_a, rng_b = np.random.default_rng(3), np.random.default_rng(3)
+    got = log_uniform(rng_a, 0.02, 0.25, 6)
+    u = rng_b.uniform(math.log(0.02), math.log(0.25), 6)
+    assert got.tolist() == [min(max(math.exp(v), 0.02), 0.25) for v in u.tolist()]

@@ -21,6 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import math
+
 import numpy as np
 
 from gpmotion.controllers import ControllerBatch
@@ -50,10 +52,23 @@ def tau_bounds(dt: float, T: float) -> tuple[float, float]:
     return lo, hi
 
 
+def exp(x):
+    """e**x element by element with the C library's ``exp``.
+
+    numpy's float64 ``exp`` and ``log`` take their own SIMD path on AVX-512
+    machines and round some results differently from the C library's (which
+    they call elsewhere), so a genome bred from a seed differed in its last
+    bit between machines (session 17: a Mr. Star-Man golden run's τ, bred on
+    an AVX-512 machine, came out one ulp away on an AVX2 one).  Variation
+    goes through here so a seed gives the same genome everywhere."""
+    a = np.asarray(x, dtype=np.float64)
+    return np.array([math.exp(v) for v in a.ravel().tolist()]).reshape(a.shape)
+
+
 def log_uniform(rng: np.random.Generator, lo: float, hi: float, size=None):
     """Log-uniform samples in [lo, hi] (clipped against rounding)."""
-    x = np.exp(rng.uniform(np.log(lo), np.log(hi), size))
-    return np.clip(x, lo, hi)
+    x = exp(rng.uniform(math.log(lo), math.log(hi), size))
+    return np.clip(x, lo, hi) if size is not None else float(np.clip(x, lo, hi))
 
 
 def _array(name, value, ndim):

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpmotion.bsr.genome import (DURATION_BOUNDS, DURATION_INIT, LAMBDA_MAX, LAMBDA_MIN,
-                                 MU_BOUNDS, SenseGenome, log_uniform, random_stimulus,
+                                 MU_BOUNDS, SenseGenome, exp, log_uniform, random_stimulus,
                                  random_theta0)
 
 P_REINIT = 1.0 / 3.0
@@ -89,15 +89,15 @@ def creep_rule(genome, rng: np.random.Generator, rule: int | None = None,
     lo, hi = g.limits[:, 0], g.limits[:, 1]
     g.theta0[r] = np.clip(g.theta0[r] + rng.normal(0.0, 1.0, g.n_act)
                           * CREEP["theta_frac"] * scale * (hi - lo), lo, hi)
-    g.tau[r] = np.clip(g.tau[r] * np.exp(rng.normal(0.0, CREEP["log_tau"] * scale)),
+    g.tau[r] = np.clip(g.tau[r] * exp(rng.normal(0.0, CREEP["log_tau"] * scale)),
                        g.tau_range[0], g.tau_range[1])
     if getattr(g, "durations", None) is not None:
-        g.durations[r] = np.clip(g.durations[r] * np.exp(
+        g.durations[r] = np.clip(g.durations[r] * exp(
             rng.normal(0.0, CREEP["log_tau"] * scale)), *DURATION_BOUNDS)
     if isinstance(g, SenseGenome):
         g.mu[r] = np.clip(g.mu[r] + rng.normal(0.0, CREEP["mu"] * scale, g.n_senses),
                           *MU_BOUNDS)
-        side = 2.0 / g.lam[r] * np.exp(rng.normal(0.0, CREEP["log_side"] * scale,
+        side = 2.0 / g.lam[r] * exp(rng.normal(0.0, CREEP["log_side"] * scale,
                                                   g.n_senses))
         g.lam[r] = np.clip(2.0 / side, LAMBDA_MIN, LAMBDA_MAX)
     return g
