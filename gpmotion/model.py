@@ -147,6 +147,7 @@ class Scene(NamedTuple):
     goal: np.ndarray        # float64[2] the goal point (x, z) senses refer to
     goal_y: float = 0.0     # its y: a 3-D figure's goal is (goal[0], goal_y, goal[1])
     obj: np.ndarray = np.zeros(0)   # a free object, its table and grip (gpmotion.sim.grip3d); empty: none
+    selfc: np.ndarray = np.zeros((0, 4))   # self-contact pairs (gpmotion.sim.selfcontact3d); empty: none
 
     @property
     def goal3(self) -> np.ndarray:
@@ -156,13 +157,15 @@ class Scene(NamedTuple):
 
 def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
-               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=()) -> Scene:
+               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=(), selfc=()) -> Scene:
     """A Scene with the defaults every shipped figure is stable with at dt=1 ms.
 
     ``goal``: (x, z) for planar figures, or (x, y, z) (a 3-D figure's senses
     refer to it; a planar one sees its (x, z)).
     ``obj``: a free object with its table and grip, 3-D figures only
     (``gpmotion.sim.grip3d.object_params``); empty: none.
+    ``selfc``: capsule pairs of a 3-D figure that collide with each other
+    (``gpmotion.sim.selfcontact3d.self_contact_pairs``); empty: none.
     """
     goal = np.asarray(goal, dtype=np.float64).reshape(-1)
     if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
@@ -179,7 +182,7 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
         raise ValueError("scene: poles need finite x, z and a radius > 0")
     return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
                  float(c_ground), float(mu), float(k_tangent), float(c_tangent),
-                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj))
+                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj), _selfc(selfc))
 
 
 def _object(obj) -> np.ndarray:
@@ -189,6 +192,15 @@ def _object(obj) -> np.ndarray:
         raise ValueError(f"scene: obj must be empty or {N_OBJ} finite numbers "
                          "(gpmotion.sim.grip3d.object_params)")
     return obj
+
+
+def _selfc(selfc) -> np.ndarray:
+    from .sim.selfcontact3d import N_SELFC
+    rows = np.array(selfc, dtype=np.float64).reshape(-1, N_SELFC)
+    if not np.all(np.isfinite(rows)) or np.any(rows < 0) or np.any(rows[:, :2] != np.round(rows[:, :2])):
+        raise ValueError("scene: selfc rows are (segment, segment, k, c): two segment indices, "
+                         "k and c >= 0 (gpmotion.sim.selfcontact3d.self_contact_pairs)")
+    return rows
 
 
 @dataclass

@@ -13,6 +13,7 @@ from numba import njit
 from ..model import FREE3D, HINGE3D, SLIDE3D
 from . import geometry3d
 from .grip3d import N_OB, OB_REC, object_start, object_step
+from .selfcontact3d import self_contacts
 from .spatial3d import (N_IA, N_IB, aba_packed, body_inertias, centre_of_mass, compute_senses3d,
                         ground_contacts, integrate, joint_torques, kinematics, pole_contacts)
 
@@ -85,6 +86,8 @@ def observe(M, S, goal, q, qd, w, cforce, com, t, senses, senses_norm):
     pen = 0.0
     if S.poles.shape[0] > 0:       # a call, not inlined: most scenes have no poles
         pen = pole_contacts(M, S, w.R, w.pos, w.v, fext)
+    if S.selfc.shape[0] > 0:       # the pairs of bodies the task lets collide
+        self_contacts(M, S.selfc, w.R, w.pos, w.v, fext)
     centre_of_mass(M, w.R, w.pos, w.v, com)
     compute_senses3d(M, goal, q, qd, w.R, w.pos, w.v, com, cforce, t, senses, senses_norm)
     return pen

@@ -203,6 +203,9 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     if has_obj and (figure.dimensions != 3 or not 0 <= scene.obj[O_LINK] < len(m.parent)):
         raise ValueError(f"scene: a free object needs a 3-D figure and a gripping link of it; "
                          f"{figure.name!r} has {len(m.parent)} links")
+    if len(scene.selfc) and (figure.dimensions != 3 or scene.selfc[:, :2].max() >= len(m.seg_link)):
+        raise ValueError(f"scene: self-contact pairs need a 3-D figure and segments of it; "
+                         f"{figure.name!r} has {len(m.seg_link)} segments")
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1
