@@ -32,7 +32,6 @@ S_G, S_H, S_K, S_C = 0, 1, 2, 3       # columns of Scene.selfc
 N_SELFC = 4
 
 _INLINE = dict(cache=True, error_model="numpy", boundscheck=False, inline="always")
-_JIT = dict(cache=True, error_model="numpy", boundscheck=False)
 
 
 def self_contact_pairs(figure, pairs, k=2e4, c=40.0) -> np.ndarray:
@@ -105,7 +104,7 @@ def _segment_world(M, R, pos, g):
     return ax, ay, az, bx, by, bz
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def self_contacts(M, selfc, R, pos, v, fext):
     """Add the self-contact forces of the pairs ``selfc`` to ``fext``; returns
     the deepest penetration (m, 0 when no pair touches)."""
