@@ -242,6 +242,28 @@ class TrunkCheck:
                 f"forearm and hand at most {m['crossing'][0] * 100:.1f} cm into the trunk"]
 
 
+# The bodies Herman's right forearm and hand collide with in a SelfContact
+# version: the trunk (torso) and the pelvis below it.  Not the head (a
+# fingertip touching the nose would be held off it by the hand's capsule)
+# nor the upper arm and shoulder rotors (adjacent: they overlap at the joint).
+SELF_CONTACT = (("forearm_r", "torso"), ("hand_r", "torso"),
+                ("forearm_r", "pelvis"), ("hand_r", "pelvis"))
+
+
+class SelfContact:
+    """Mixin for a task version in which Herman's right forearm and hand
+    collide with his trunk and pelvis (``SELF_CONTACT``): capsule-capsule
+    penalty contact in the 3-D kernel (``gpmotion.sim.selfcontact3d``), so
+    a forearm cannot pass through the body in the first place, where
+    TrunkCheck only charges and judges it.  List it before the task's class
+    (``class V(SelfContact, HermanXV3)``); TrunkCheck's judgement stays (the
+    contact's springs let in a few millimetres)."""
+
+    def scene(self):
+        from gpmotion.sim.selfcontact3d import self_contact_pairs
+        return super().scene()._replace(selfc=self_contact_pairs(self.figure, SELF_CONTACT))
+
+
 def checked_terms(terms) -> tuple[Term, ...]:
     """``terms`` with the ``through`` term's doc saying what TrunkCheck adds."""
     return tuple(replace(t, doc=f"{t.doc}; + the same for the right forearm's and hand's capsules "

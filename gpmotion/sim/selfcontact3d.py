@@ -34,14 +34,17 @@ N_SELFC = 4
 _INLINE = dict(cache=True, error_model="numpy", boundscheck=False, inline="always")
 
 
-def self_contact_pairs(figure, pairs, k=2e4, c=40.0) -> np.ndarray:
+def self_contact_pairs(figure, pairs, k=4e4, c=40.0) -> np.ndarray:
     """The ``Scene.selfc`` rows for ``pairs`` of body names, checked.
 
-    Defaults: 1 cm of penetration pushes back with 200 N, twice what
-    Herman's shoulder servo (50 N·m) can press at half a metre; at dt = 2 ms
-    √(k/m)·dt = 0.27 and 0.44, c·dt/m = 0.07 and 0.19 for his forearm
+    Defaults: 1 cm of penetration pushes back with 400 N, four times what
+    Herman's shoulder servo (50 N·m) presses with at half a metre, so a
+    forearm held against the trunk sinks in ~3-6 mm; at dt = 2 ms
+    √(k/m)·dt = 0.38 and 0.62, c·dt/m = 0.07 and 0.19 for his forearm
     (1.12 kg) and hand (0.42 kg): explicit, like every contact force here,
-    and stable while both stay well below 1."""
+    and stable while both stay well below 1 (session 17: at k = 2e4 a GP
+    controller pressed its forearm 1.1 cm into the belly; random arm
+    motions at dt = 2 ms went 1.9 cm in at 2e4, 1.15 cm at 4e4)."""
     if figure.dimensions != 3:
         raise ValueError(f"self-contact: {figure.name!r} is planar; self-contact needs a 3-D figure")
     if not (np.isfinite(k) and np.isfinite(c) and k >= 0 and c >= 0):
