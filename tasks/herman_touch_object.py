@@ -15,9 +15,9 @@ from typing import ClassVar
 import numpy as np
 
 from gpmotion.sim import geometry3d
-from gpmotion.task import Ease, Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, SelfContact,
-                                    TrunkCheck, goal_scene, on_limits,
+from gpmotion.task import Term, register_task
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+                                    goal_scene, on_limits,
                                     rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -96,13 +96,8 @@ class HermanTouchObject(HermanTask):
     def scene(self):
         return goal_scene(self.object_position())     # senses: fingertip − object
 
-    def object_in(self, traj) -> np.ndarray:
-        """Where the object is in ``traj``'s episodes (the scene's goal: a
-        curriculum may move it, v4)."""
-        return self.object_position()
-
     def measure(self, traj):
-        d = np.linalg.norm(traj.site("fingertip_r") - self.object_in(traj), axis=-1)
+        d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
         out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
         out["limits"] = on_limits(traj, self.controlled, HOLD)
         out.update(style_measures(traj))
@@ -142,43 +137,3 @@ class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
     session 15 found v2's seed 0 on target 0 with the forearm 8.0 cm
     into the belly, on target 1 5.8 cm).  docs/notes/herman.md, session 16."""
     version = 3
-
-
-@register_task
-class HermanTouchObjectV4(SelfContact, HermanTouchObjectV3):
-    """v4: Herman's right forearm and hand collide with his trunk and pelvis
-    (``_herman.SelfContact``), and on target 1 the object comes in from
-    target 0's place over the first half of the run (``ease_in``).
-
-    Target 1 under v3 solved 0 / 5: charged for the forearm's crossing, its
-    searches stopped 14-19 cm short, never having found feedback on the
-    fingertip's error that gets there without going through the belly
-    (session 16).  Self-contact alone (the body in the way instead of a
-    charge): 2 / 5, the misses 14-19 cm short again; the charge on from the
-    first generation: 2 / 5.  Target 0 is the easy reach (5 / 5); starting
-    there and moving the object to target 1 lets the search keep what
-    reaches and follow it.  docs/notes/herman.md, session 17."""
-    version = 4
-    params = {**HermanTouchObjectV3.params, "ease_in": 0.0, "travel": 1.0}
-    bounds = {**HermanTouchObjectV3.bounds, "ease_in": (0, 1), "travel": (0, 1)}
-    preset_weights = {1: {**HermanTouchObjectV3.preset_weights[1], "ease_in": 1.0}}
-    param_docs = {**HermanTouchObjectV3.param_docs,
-                  "ease_in": "1: the object starts at target 0's place and moves to its own over "
-                             "the first half of the run (default 0; target 1: 1)",
-                  "travel": "where the object is between target 0's place (0) and its own (1); "
-                            "ease_in's curriculum moves it: leave at 1"}
-
-    @property
-    def curriculum(self):
-        return ({"travel": Ease(0.0, (0.0, 0.5), doc="object moved in from target 0's place")}
-                if self.params["ease_in"] else {})
-
-    def object_position(self) -> np.ndarray:
-        end = super().object_position()
-        m = self.figure.model
-        start = m.fixed_pos + m.fixed_rot @ np.array(PRESETS[0], float)
-        return start + self.params["travel"] * (end - start)
-
-    def object_in(self, traj) -> np.ndarray:
-        # under the curriculum the object is where the episodes' scene put it
-        return traj.scene.goal3 if self.curriculum else self.object_position()

@@ -181,32 +181,6 @@ def test_touch_object_presets_are_reachable(herman, target):
     assert m["object"][0] < 0.005 and task.success(None, m)[0]
 
 
-def test_touch_object_v4_eases_target_1_in_from_target_0_and_scores_where_it_is():
-    """v4 (session 17): on target 1 the object starts at target 0's place and
-    reaches its own over the first half of the run; the cost is taken
-    against where the episodes' scene has it.  Targets 0 and 2 have no
-    curriculum.  Every preset's scene lets the right forearm and hand
-    collide with the trunk and the pelvis."""
-    from gpmotion.tasks._herman import SELF_CONTACT
-    t1 = get_task("herman_touch_object", target=1)
-    assert t1.version == 4 and t1.params["ease_in"] == 1.0
-    p0, p1 = (np.array(PRESETS[i]) + [0.0, 0.0, 0.96] for i in (0, 1))
-    assert t1.scene_at(0.0).goal3 == pytest.approx(p0)
-    assert t1.scene_at(0.25).goal3 == pytest.approx((p0 + p1) / 2)
-    assert t1.scene_at(0.5).goal3 == pytest.approx(p1) and t1.object_position() == pytest.approx(p1)
-    assert t1.phase(0.1) != t1.phase(0.2)                 # no cost reused across the move
-    # a fingertip held on target 0's place: a touch while the object is there, not at the end
-    herman = t1.figure
-    angles, _ = reach(herman, "fingertip_r", p0, x0=[-0.8, 0.3, 0.0, 1.5, 0.0, 0.0])
-    q = pose_q(herman, **angles)
-    early, late = (t1.measure(_still(herman, q, scene=t1.scene_at(p))) for p in (0.0, 1.0))
-    assert early["object_end"][0] < 0.005 < 0.3 < late["object_end"][0]
-    for target in (0, 2):
-        t = get_task("herman_touch_object", target=target)
-        assert t.curriculum == {} and t.scene_at(0.0).goal3 == pytest.approx(t.object_position())
-        assert len(t.scene().selfc) == len(SELF_CONTACT)
-
-
 def test_touch_object_rejects_bad_targets():
     with pytest.raises(ValueError, match="target"):
         get_task("herman_touch_object", target=5)

@@ -140,13 +140,21 @@ ACROSS = dict(shoulder_r_y=0.02, shoulder_r_z=1.4, shoulder_r_x=0.22, elbow_r=1.
 
 
 def test_herman_servoing_his_forearm_into_the_trunk_is_stopped_at_its_surface():
-    from gpmotion.tasks._herman import CROSSING, limbs_overlap, pose_q
+    """_herman.SelfContact's pairs (the right forearm and hand against the
+    trunk and the pelvis) hold a forearm servoed through the trunk outside,
+    within the forearm check's 1 cm."""
+    from gpmotion.tasks._herman import CROSSING, SELF_CONTACT, SelfContact, limbs_overlap, pose_q
+    from gpmotion.tasks.herman_touch_object import HermanTouchObjectV3
+
+    class Touching(SelfContact, HermanTouchObjectV3):
+        pass
+    assert len(Touching().scene().selfc) == len(SELF_CONTACT)
     fig = gpmotion.load_figure("herman")
     target = fig.model.neutral.copy()
     q = pose_q(fig, **ACROSS)
     for name in ACROSS:
         target[fig.actuator_names.index(name)] = q[fig.model.act_q[fig.actuator_names.index(name)]]
-    pairs = C.self_contact_pairs(fig, [("forearm_r", "torso"), ("hand_r", "torso")])
+    pairs = C.self_contact_pairs(fig, SELF_CONTACT)
     runs = {}
     for label, selfc in (("through", ()), ("stopped", pairs)):
         runs[label] = rollout(fig, gpmotion.make_scene(selfc=selfc), schedule.constant(target),
