@@ -32,12 +32,10 @@ def early(base, name):
 early(HermanTouchObjectV3, "trial_obj")
 early(HermanReachStandingV3, "trial_reach")
 early(HermanTouchV3, "trial_touch")
-from gpmotion.sim.selfcontact3d import self_contact_pairs
-PAIRS = (("forearm_r", "torso"), ("hand_r", "torso"), ("forearm_r", "pelvis"), ("hand_r", "pelvis"))
+from gpmotion.tasks._herman import SelfContact
 def contact(base, name):
-    class T(base):
-        def scene(self):
-            return super().scene()._replace(selfc=self_contact_pairs(self.figure, PAIRS))
+    class T(SelfContact, base):
+        pass
     T.name = name; T.version = 1; T.__name__ = name
     return register_task(T)
 contact(HermanTouchObjectV3, "sc_obj")
