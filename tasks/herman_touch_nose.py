@@ -9,8 +9,10 @@ and stay).  Success: within 3 cm at the end with the motion at rest.  Style
 points, phased in: keep the hand out of the torso, disturb the held joints
 little, spend little work, end at rest.
 """
+from dataclasses import replace
+
 from gpmotion.task import register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, TrunkCheck
+from gpmotion.tasks._herman import GP_DEFAULTS, SelfContact, TrunkCheck
 from gpmotion.tasks.herman_touch import HermanTouch
 
 
@@ -36,3 +38,18 @@ class HermanTouchNoseV2(TrunkCheck, HermanTouchNose):
     session 15 found 3 of v1's 4 successes on 5 seeds passing the forearm
     through the chest, by 1.2, 4.6 and 11.3 cm).  docs/notes/herman.md, session 16."""
     version = 2
+
+
+@register_task
+class HermanTouchNoseV3(SelfContact, HermanTouchNoseV2):
+    """v3: the right forearm and hand collide with the trunk and the pelvis
+    (``_herman.SelfContact``: the body, not only a charge, keeps the forearm
+    out), and the rest term weighs three times as much.  v2 solved 2 / 5,
+    its misses touching but still moving (5.4-5.8 cm/s) or short at rest;
+    the rest term x3 alone solved 3 / 5 (session 16); with self-contact as
+    well, 5 / 5 (session 17, the trial ``herman_touch`` site=nose with
+    SelfContact and w_rest 3: the same cost, scene and GP settings, tested).
+    docs/notes/herman.md, session 17."""
+    version = 3
+    terms = tuple(replace(t, weight=3.0 * t.weight) if t.name == "rest" else t
+                  for t in HermanTouchNoseV2.terms)

@@ -578,3 +578,25 @@ def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch
     # with the previous version's own test passed, only the check refuses it
     monkeypatch.setattr(task_class(old.id), "reached", lambda self, traj, m: np.ones(1, bool))
     assert old.reached(tr, m_old)[0] and not new.reached(tr, m_new)[0]
+
+
+def test_touch_nose_v3_is_the_session_17_trial():
+    """herman_touch_nose-v3 runs the search its rate was measured with:
+    herman_touch-v3 on the nose with w_rest 3 and Herman's forearm and hand
+    colliding with the trunk and the pelvis (docs/notes/herman_s17_trials.py):
+    the same terms at the same effective weights and phases, scene, GP
+    settings, joints and senses."""
+    from gpmotion.tasks._herman import SELF_CONTACT
+    new = get_task("herman_touch_nose")
+    trial = get_task("herman_touch-v3", site="nose", w_rest=3.0)
+    assert new.version == 3
+
+    def weights(task):
+        return [(t.name, t.weight * (task.params[t.param] if t.param else 1.0), t.phase, t.doc)
+                for t in task.terms]
+    assert weights(new) == weights(trial)
+    assert len(new.scene().selfc) == len(SELF_CONTACT) and len(trial.scene().selfc) == 0
+    assert np.array_equal(new.scene().goal3, trial.scene().goal3)
+    assert (new.gp_targets, new.gp_defaults, new.controlled, new.terminals, new.dt, new.n_steps) == \
+        (trial.gp_targets, trial.gp_defaults, trial.controlled, trial.terminals, trial.dt, trial.n_steps)
+    assert new.success_threshold == trial.success_threshold
