@@ -7,9 +7,10 @@ terms watch what the arm's motion does to the rest of the body:
 * ``energy``    actuator work over the episode (J)
 * ``posture``   mean RMS deviation of the PD-held joints from neutral (rad):
                 torso sway, the other arm swinging, the head nodding
-* ``through``   the hand or fingertip inside the torso's cylinder (no self-
-                collision in the kernel, so a penalty stands in for it):
-                fraction of frames inside + deepest penetration / radius
+* ``through``   the hand or fingertip inside the torso's cylinder (a penalty
+                standing in for self-collision, which only a SelfContact
+                version has): fraction of frames inside + deepest
+                penetration / radius
 * ``rest``      mean fingertip speed over the last 0.3 s (m/s)
 
 This module starts with ``_``: the plugin loader does not import it as a task.
