@@ -522,6 +522,9 @@ class DaskEvaluator(_ChunkedEvaluator):
                     scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
                 self._client = distributed.Client(self._cluster, timeout=timeout,
                                                   security=self.security)
+                # the cluster returns once its workers have started, not registered:
+                # without the wait, a loaded machine warmed (and counted) none of them
+                self._client.wait_for_workers(workers, timeout=timeout)
             else:
                 self._client = self._connect(scheduler, timeout)
             self._client._timeout = self.reconnect_grace     # how long the client itself retries
