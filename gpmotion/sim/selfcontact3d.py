@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .spatial3d import apply_point_force, fixed_point_world, point_velocity, point_world
+from .spatial3d import apply_point_force, point_velocity, segment_world
 
 S_G, S_H, S_K, S_C = 0, 1, 2, 3       # columns of Scene.selfc
 N_SELFC = 4
@@ -93,29 +93,14 @@ def closest_params(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, d2x, d2y, d2z):
 
 
 @njit(**_INLINE)
-def _segment_world(M, R, pos, g):
-    """World end points of segment g."""
-    link = M.seg_link[g]
-    a0, a1, a2 = M.seg_a[g, 0], M.seg_a[g, 1], M.seg_a[g, 2]
-    b0, b1, b2 = M.seg_b[g, 0], M.seg_b[g, 1], M.seg_b[g, 2]
-    if link >= 0:
-        ax, ay, az = point_world(R, pos, link, a0, a1, a2)
-        bx, by, bz = point_world(R, pos, link, b0, b1, b2)
-    else:
-        ax, ay, az = fixed_point_world(M.fixed_rot, M.fixed_pos, a0, a1, a2)
-        bx, by, bz = fixed_point_world(M.fixed_rot, M.fixed_pos, b0, b1, b2)
-    return ax, ay, az, bx, by, bz
-
-
-@njit(**_INLINE)
 def self_contacts(M, selfc, R, pos, v, fext):
     """Add the self-contact forces of the pairs ``selfc`` to ``fext``; returns
     the deepest penetration (m, 0 when no pair touches)."""
     deepest = 0.0
     for k in range(selfc.shape[0]):
         g, h = int(selfc[k, S_G]), int(selfc[k, S_H])
-        ax, ay, az, bx, by, bz = _segment_world(M, R, pos, g)
-        cx, cy, cz, dx, dy, dz = _segment_world(M, R, pos, h)
+        ax, ay, az, bx, by, bz = segment_world(M, R, pos, g)
+        cx, cy, cz, dx, dy, dz = segment_world(M, R, pos, h)
         s, t = closest_params(ax, ay, az, bx - ax, by - ay, bz - az,
                               cx, cy, cz, dx - cx, dy - cy, dz - cz)
         ex = ax + s * (bx - ax) - (cx + t * (dx - cx))

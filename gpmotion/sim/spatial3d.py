@@ -632,6 +632,21 @@ def fixed_point_world(FR, Fp, px, py, pz):
 
 
 @njit(**_INLINE)
+def segment_world(M, R, pos, g):
+    """World end points (a, b) of segment g, on a link or on the fixed root."""
+    link = M.seg_link[g]
+    a0, a1, a2 = M.seg_a[g, 0], M.seg_a[g, 1], M.seg_a[g, 2]
+    b0, b1, b2 = M.seg_b[g, 0], M.seg_b[g, 1], M.seg_b[g, 2]
+    if link >= 0:
+        ax, ay, az = point_world(R, pos, link, a0, a1, a2)
+        bx, by, bz = point_world(R, pos, link, b0, b1, b2)
+    else:
+        ax, ay, az = fixed_point_world(M.fixed_rot, M.fixed_pos, a0, a1, a2)
+        bx, by, bz = fixed_point_world(M.fixed_rot, M.fixed_pos, b0, b1, b2)
+    return ax, ay, az, bx, by, bz
+
+
+@njit(**_INLINE)
 def point_velocity(R, v, link, px, py, pz):
     """World velocity of a link-frame point: R (v + ω × p) (zero on a fixed root)."""
     if link < 0:
@@ -720,7 +735,6 @@ def pole_contacts(M, S, R, pos, v, fext):
     y through (x, z), so the distance is taken in the x–z projection.
     """
     k_pole, c_pole = S.k_pole, S.c_pole
-    FR, Fp = M.fixed_rot, M.fixed_pos
     deepest = 0.0
     for j in range(S.poles.shape[0]):
         cx, cz, rp = S.poles[j, 0], S.poles[j, 1], S.poles[j, 2]
@@ -729,12 +743,7 @@ def pole_contacts(M, S, R, pos, v, fext):
             sa0, sa1, sa2 = M.seg_a[g, 0], M.seg_a[g, 1], M.seg_a[g, 2]
             sb0, sb1, sb2 = M.seg_b[g, 0], M.seg_b[g, 1], M.seg_b[g, 2]
             rr = M.seg_r[g]
-            if link >= 0:
-                ax, ay, az = point_world(R, pos, link, sa0, sa1, sa2)
-                bx, by, bz = point_world(R, pos, link, sb0, sb1, sb2)
-            else:
-                ax, ay, az = fixed_point_world(FR, Fp, sa0, sa1, sa2)
-                bx, by, bz = fixed_point_world(FR, Fp, sb0, sb1, sb2)
+            ax, ay, az, bx, by, bz = segment_world(M, R, pos, g)
             t, ex, ez, dist = closest_to_pole(ax, az, bx, bz, cx, cz)
             pen = rr + rp - dist
             if pen <= 0.0 or dist == 0.0:
