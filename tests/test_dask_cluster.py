@@ -229,7 +229,7 @@ def test_cli_scheduler_lost_exits_3_and_resumes_on_a_process_pool(cluster, tmp_p
 
 def _certificates(folder):
     """A throwaway CA and a certificate for 127.0.0.1 signed by it (PEM files)."""
-    crypto = pytest.importorskip("cryptography")  # noqa: F841
+    pytest.importorskip("cryptography")
     from cryptography import x509
     from cryptography.hazmat.primitives import hashes, serialization
     from cryptography.hazmat.primitives.asymmetric import ec

@@ -142,7 +142,7 @@ def test_a_spinning_body_and_the_object_it_holds_fall_together_at_g():
     within a millimetre of where it was gripped on the block (once the start's
     transient has died away)."""
     fig = gpmotion.load_figure(block())
-    m, M, g, dt = 0.5, fig.total_mass, 9.81, 1e-3
+    m, M, g = 0.5, fig.total_mass, 9.81
     scene = gpmotion.make_scene(ground=False, obj=obj_for(fig, "b", (0.1, 0.0, 0.045), mass=m))
     qd0 = [0.5, 1.0, 4.0, 0.3, 0.0, 0.2]
     tr = run(fig, scene, 1.0, qd0=qd0)

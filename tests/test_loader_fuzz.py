@@ -7,7 +7,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gpmotion.families import family_names, make_family
-from gpmotion.records import FormatError
 from gpmotion.task import get_task
 
 TASK = get_task("lamp_hop", seconds=0.3)

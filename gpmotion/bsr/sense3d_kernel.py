@@ -86,7 +86,7 @@ def select(ci, cf, cstate, previous):
 
 @njit(**KERNEL_JIT_3D)
 def control(ci, cf, senses, senses_norm, t, cstate, targets, taus):
-    n_rules, V, n_act, every = ci[0], ci[1], ci[2], ci[3]
+    V, n_act, every = ci[1], ci[2], ci[3]
     step = int(cstate[1])
     cstate[1] += 1.0
     if step % every == 0:
