@@ -22,7 +22,7 @@ import numpy as np
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
 from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask,
-                                    TrunkCheck, goal_scene,
+                                    SelfContact, TrunkCheck, goal_scene,
                                     rest_scaled, site_at_rest, style_measures, style_terms, tail)
 
 TOUCH = 0.03            # m: "touching"
@@ -203,3 +203,19 @@ class HermanTouchV3(TrunkCheck, HermanTouchV2):
 
     def _joints(self, f, site):
         return ARM if site in self.RIGHT_ARM_REACHES else super()._joints(f, site)
+
+
+@register_task
+class HermanTouchV4(SelfContact, HermanTouchV3):
+    """v4: the right forearm and hand collide with the trunk and the pelvis
+    (``_herman.SelfContact``), and the angle sites' rest term weighs three
+    times as much, as ``herman_touch_nose-v3``'s.  Session 18, 5 seeds each
+    (the trials in docs/notes/herman_s17_trials.py: the same cost, scene and
+    GP settings, tested): knee_l 5 / 5 (v3 3 / 5), elbow_l 4 / 5 (v3 2 / 5),
+    the nose 5 / 5 (the recipe of ``herman_touch_nose-v3``).  A site on the
+    trunk is touched with the hand resting on it: the fingertip ends the
+    hand's 3 cm capsule, which the contact holds a few millimetres in.
+    docs/notes/herman.md, session 18."""
+    version = 4
+    ANGLE = {**HermanTouchV3.ANGLE, "w_rest": 3.0}
+

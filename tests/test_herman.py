@@ -456,8 +456,8 @@ def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
     assert (v1.gp_targets, v2.gp_targets, nose.gp_targets) == ("angle", "rate", "angle")
     assert make_family("gp", v2).make_search(0).config()["polish"] == 10
     assert "polish" not in make_family("gp", v1).make_search(0).config()
-    # on the nose v2 (and the newest) is herman_touch_nose (rate targets fail there)
-    v2_nose = get_task("herman_touch")
+    # on the nose v2 is herman_touch_nose-v1 (rate targets fail there; v4 is -v3: tested below)
+    v2_nose = get_task("herman_touch-v2")
     assert (v2_nose.site, v2_nose.gp_targets) == ("nose", "angle")
     assert {x.name: x.weight for x in v2_nose.terms} == {x.name: x.weight for x in nose.terms}
     assert make_family("gp", v2_nose).make_search(0).config()["polish"] == 20
@@ -578,6 +578,30 @@ def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch
     # with the previous version's own test passed, only the check refuses it
     monkeypatch.setattr(task_class(old.id), "reached", lambda self, traj, m: np.ones(1, bool))
     assert old.reached(tr, m_old)[0] and not new.reached(tr, m_new)[0]
+
+
+@pytest.mark.parametrize("site", ["knee_l", "elbow_l", "nose"])
+def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
+    """herman_touch-v4 runs the searches its rates were measured with
+    (sessions 17-18, docs/notes/herman_s17_trials.py: herman_touch-v3 with
+    SelfContact, --param w_rest=3): the same terms at the same effective
+    weights, scene (with the four contact pairs), GP settings, joints and
+    senses; the sites keep v3's recipes (angle on the nose and left elbow,
+    rate on the knee)."""
+    from gpmotion.tasks._herman import SELF_CONTACT
+    v4, v3 = get_task("herman_touch", site=site), get_task("herman_touch-v3", site=site, w_rest=3.0)
+    assert v4.version == 4
+
+    def weights(task):
+        return [(t.name, t.weight * (task.params[t.param] if t.param else 1.0), t.phase, t.doc)
+                for t in task.terms]
+    assert weights(v4) == weights(v3)
+    assert len(v4.scene().selfc) == len(SELF_CONTACT) and len(v3.scene().selfc) == 0
+    assert np.array_equal(v4.scene().goal3, v3.scene().goal3)
+    assert (v4.gp_targets, v4.gp_defaults, v4.controlled, v4.terminals, v4.dt, v4.n_steps) == \
+        (v3.gp_targets, v3.gp_defaults, v3.controlled, v3.terminals, v3.dt, v3.n_steps)
+    assert v4.gp_targets == ("rate" if site == "knee_l" else "angle")
+    assert get_task("herman_touch-v3", site=site).params["w_rest"] == (3.0 if site == "knee_l" else 1.0)
 
 
 def test_touch_nose_v3_is_the_session_17_trial():
