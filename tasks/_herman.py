@@ -261,8 +261,14 @@ class SelfContact:
     contact's springs let in a few millimetres)."""
 
     def scene(self):
+        return SelfContact.scene_for(self, super().scene())
+
+    @staticmethod
+    def scene_for(task, scene):
+        """``scene`` with Herman's self-contact pairs (for a version that
+        collides on some of its presets only)."""
         from gpmotion.sim.selfcontact3d import self_contact_pairs
-        return super().scene()._replace(selfc=self_contact_pairs(self.figure, SELF_CONTACT))
+        return scene._replace(selfc=self_contact_pairs(task.figure, SELF_CONTACT))
 
 
 def checked_terms(terms) -> tuple[Term, ...]:

@@ -16,8 +16,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
-                                    goal_scene, on_limits,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, SelfContact,
+                                    TrunkCheck, goal_scene, on_limits,
                                     rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -137,3 +137,32 @@ class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
     session 15 found v2's seed 0 on target 0 with the forearm 8.0 cm
     into the belly, on target 1 5.8 cm).  docs/notes/herman.md, session 16."""
     version = 3
+
+
+@register_task
+class HermanTouchObjectV4(HermanTouchObjectV3):
+    """v4: target 1 takes the nose's recipe: the right forearm and hand
+    collide with the trunk and the pelvis (``_herman.SelfContact``), the trees
+    drive angle targets and the last 20 of the 50 generations polish (its
+    v2 weights stay: limits 2, rest x3).  Session 18, 5 seeds: 4 / 5 in
+    64-71 s of main-thread CPU (v3: 0 / 5; v3 with self-contact and rate
+    targets, session 17: 2 / 5).  Targets 0 and 2 keep v3's search, without
+    self-contact: with it and rate targets they solved 4 / 5 and 3 / 5
+    (session 17), with angle targets and polish 20 0 / 2 and 0 / 2 (session
+    18, stopped), against v3's 5 / 5 and 5 / 5.  docs/notes/herman.md."""
+    version = 4
+    CONTACT_PRESETS = (1,)           # the presets on the nose's recipe
+    RECIPE = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}}
+
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        if self.contact:
+            self.gp_targets, self.gp_defaults = self.RECIPE["gp_targets"], self.RECIPE["gp_defaults"]
+
+    @property
+    def contact(self) -> bool:
+        return int(self.params["target"]) in self.CONTACT_PRESETS
+
+    def scene(self):
+        scene = super().scene()
+        return SelfContact.scene_for(self, scene) if self.contact else scene

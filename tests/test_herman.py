@@ -604,6 +604,27 @@ def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     assert get_task("herman_touch-v3", site=site).params["w_rest"] == (3.0 if site == "knee_l" else 1.0)
 
 
+def test_touch_object_v4_is_the_trial_its_target_1_rate_was_measured_on():
+    """herman_touch_object-v4 on target 1 is the session 18 trial (v3 with
+    SelfContact, --targets angle --search polish=20): the same terms and
+    weights, the four contact pairs, angle targets, polish 20; targets 0
+    and 2 are v3's search unchanged (no contact, rate targets, polish 10)."""
+    from gpmotion.tasks._herman import SELF_CONTACT
+    for target in (0, 1, 2):
+        v4, v3 = (get_task(f"herman_touch_object-v{v}", target=target) for v in (4, 3))
+        assert [(t.name, t.weight, t.phase) for t in v4.terms] == [(t.name, t.weight, t.phase) for t in v3.terms]
+        assert v4.params == v3.params and np.array_equal(v4.scene().goal3, v3.scene().goal3)
+        assert (v4.controlled, v4.terminals, v4.dt, v4.n_steps) == (v3.controlled, v3.terminals, v3.dt, v3.n_steps)
+        assert len(v3.scene().selfc) == 0
+        if target == 1:
+            assert len(v4.scene().selfc) == len(SELF_CONTACT)
+            assert (v4.gp_targets, v4.gp_defaults) == ("angle", {**v3.gp_defaults, "polish": 20})
+        else:
+            assert len(v4.scene().selfc) == 0
+            assert (v4.gp_targets, v4.gp_defaults) == (v3.gp_targets, v3.gp_defaults)
+    assert get_task("herman_touch_object", target=1).version == 4
+
+
 def test_touch_nose_v3_is_the_session_17_trial():
     """herman_touch_nose-v3 runs the search its rate was measured with:
     herman_touch-v3 on the nose with w_rest 3 and Herman's forearm and hand

@@ -5,6 +5,7 @@ charge; XEASE: the ease-in phase.  sc_* use self_contact_pairs' default k
 (2e4 for the runs of this session before the default became 4e4).
 
     python docs/notes/herman_s17_trials.py --seeds 5 --only sc/obj1 --out F
+    python docs/notes/herman_s17_trials.py --seeds 5 --only sc/obj1 --targets angle --search polish=20 --out F
 """
 import sys
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -67,6 +68,7 @@ def travel(base, name):
 SCObj = contact(HermanTouchObjectV3, "sc_obj_base")
 travel(SCObj, "sct_obj")
 hs.EXTRA.update({"sct/obj1": ("sct_obj", {"target": 1})})
+hs.EXTRA.update({"sc/obj0": ("sc_obj", {"target": 0}), "sc/obj2": ("sc_obj", {"target": 2})})
 hs.EXTRA.update({"sc/obj1": ("sc_obj", {"target": 1}), "sc/reach": ("sc_reach", {}),
                  "sc/nose": ("sc_touch", {"site": "nose"}), "sc/knee_l": ("sc_touch", {"site": "knee_l"}),
                  "sc/elbow_l": ("sc_touch", {"site": "elbow_l"})})
