@@ -580,6 +580,22 @@ def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch
     assert old.reached(tr, m_old)[0] and not new.reached(tr, m_new)[0]
 
 
+def _assert_same_search_with_self_contact(new, trial):
+    """``new`` runs ``trial``'s search with Herman's self-contact pairs added:
+    the same terms at the same effective weights and phases, goal, GP
+    settings, joints, senses and step."""
+    from gpmotion.tasks._herman import SELF_CONTACT
+
+    def weights(task):
+        return [(t.name, t.weight * (task.params[t.param] if t.param else 1.0), t.phase, t.doc)
+                for t in task.terms]
+    assert weights(new) == weights(trial)
+    assert len(new.scene().selfc) == len(SELF_CONTACT) and len(trial.scene().selfc) == 0
+    assert np.array_equal(new.scene().goal3, trial.scene().goal3)
+    assert (new.gp_targets, new.gp_defaults, new.controlled, new.terminals, new.dt, new.n_steps) == \
+        (trial.gp_targets, trial.gp_defaults, trial.controlled, trial.terminals, trial.dt, trial.n_steps)
+
+
 @pytest.mark.parametrize("site", ["knee_l", "elbow_l", "nose"])
 def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     """herman_touch-v4 runs the searches its rates were measured with
@@ -588,18 +604,9 @@ def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     weights, scene (with the four contact pairs), GP settings, joints and
     senses; the sites keep v3's recipes (angle on the nose and left elbow,
     rate on the knee)."""
-    from gpmotion.tasks._herman import SELF_CONTACT
     v4, v3 = get_task("herman_touch", site=site), get_task("herman_touch-v3", site=site, w_rest=3.0)
     assert v4.version == 4
-
-    def weights(task):
-        return [(t.name, t.weight * (task.params[t.param] if t.param else 1.0), t.phase, t.doc)
-                for t in task.terms]
-    assert weights(v4) == weights(v3)
-    assert len(v4.scene().selfc) == len(SELF_CONTACT) and len(v3.scene().selfc) == 0
-    assert np.array_equal(v4.scene().goal3, v3.scene().goal3)
-    assert (v4.gp_targets, v4.gp_defaults, v4.controlled, v4.terminals, v4.dt, v4.n_steps) == \
-        (v3.gp_targets, v3.gp_defaults, v3.controlled, v3.terminals, v3.dt, v3.n_steps)
+    _assert_same_search_with_self_contact(v4, v3)
     assert v4.gp_targets == ("rate" if site == "knee_l" else "angle")
     assert get_task("herman_touch-v3", site=site).params["w_rest"] == (3.0 if site == "knee_l" else 1.0)
 
@@ -631,17 +638,8 @@ def test_touch_nose_v3_is_the_session_17_trial():
     colliding with the trunk and the pelvis (docs/notes/herman_s17_trials.py):
     the same terms at the same effective weights and phases, scene, GP
     settings, joints and senses."""
-    from gpmotion.tasks._herman import SELF_CONTACT
     new = get_task("herman_touch_nose")
     trial = get_task("herman_touch-v3", site="nose", w_rest=3.0)
     assert new.version == 3
-
-    def weights(task):
-        return [(t.name, t.weight * (task.params[t.param] if t.param else 1.0), t.phase, t.doc)
-                for t in task.terms]
-    assert weights(new) == weights(trial)
-    assert len(new.scene().selfc) == len(SELF_CONTACT) and len(trial.scene().selfc) == 0
-    assert np.array_equal(new.scene().goal3, trial.scene().goal3)
-    assert (new.gp_targets, new.gp_defaults, new.controlled, new.terminals, new.dt, new.n_steps) == \
-        (trial.gp_targets, trial.gp_defaults, trial.controlled, trial.terminals, trial.dt, trial.n_steps)
+    _assert_same_search_with_self_contact(new, trial)
     assert new.success_threshold == trial.success_threshold
