@@ -261,14 +261,14 @@ class SelfContact:
     contact's springs let in a few millimetres)."""
 
     def scene(self):
-        return SelfContact.scene_for(self, super().scene())
+        return with_self_contact(super().scene(), self.figure)
 
-    @staticmethod
-    def scene_for(task, scene):
-        """``scene`` with Herman's self-contact pairs (for a version that
-        collides on some of its presets only)."""
-        from gpmotion.sim.selfcontact3d import self_contact_pairs
-        return scene._replace(selfc=self_contact_pairs(task.figure, SELF_CONTACT))
+
+def with_self_contact(scene, figure):
+    """``scene`` with Herman's self-contact pairs (``SelfContact``'s scene; a
+    version that collides on some presets only calls it itself)."""
+    from gpmotion.sim.selfcontact3d import self_contact_pairs
+    return scene._replace(selfc=self_contact_pairs(figure, SELF_CONTACT))
 
 
 def checked_terms(terms) -> tuple[Term, ...]:

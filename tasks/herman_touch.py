@@ -218,4 +218,3 @@ class HermanTouchV4(SelfContact, HermanTouchV3):
     docs/notes/herman.md, session 18."""
     version = 4
     ANGLE = {**HermanTouchV3.ANGLE, "w_rest": 3.0}
-

@@ -16,8 +16,8 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, SelfContact,
-                                    TrunkCheck, goal_scene, on_limits,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+                                    goal_scene, on_limits, with_self_contact,
                                     rest_scaled, style_measures, style_terms, tail)
 
 TOUCH = 0.04           # m
@@ -142,7 +142,7 @@ class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
 @register_task
 class HermanTouchObjectV4(HermanTouchObjectV3):
     """v4: target 1 takes the nose's recipe: the right forearm and hand
-    collide with the trunk and the pelvis (``_herman.SelfContact``), the trees
+    collide with the trunk and the pelvis (``_herman.with_self_contact``), the trees
     drive angle targets and the last 20 of the 50 generations polish (its
     v2 weights stay: limits 2, rest x3).  Session 18, 5 seeds: 4 / 5 in
     64-71 s of main-thread CPU (v3: 0 / 5; v3 with self-contact and rate
@@ -165,4 +165,4 @@ class HermanTouchObjectV4(HermanTouchObjectV3):
 
     def scene(self):
         scene = super().scene()
-        return SelfContact.scene_for(self, scene) if self.contact else scene
+        return with_self_contact(scene, self.figure) if self.contact else scene
