@@ -96,6 +96,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
         crossing = _crossing(out / "best.json")
+        first = first_solver(out / "log.csv", wall, main)
     return {"config": name, "seed": seed, "targets": family.get("targets", "task default"),
             **({"search": search} if search else {}),
             **({"params": extra} if extra else {}),
@@ -104,7 +105,27 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
             "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "main_cpu_s": round(main, 1), "load": round(load, 1),
             "final_cost": round(best["final_cost"], 4), "crossing_cm": round(crossing * 100, 1),
-            "facts": best.get("facts", [])}
+            **first, "facts": best.get("facts", [])}
+
+
+def first_solver(log: Path, wall: float, main: float) -> dict:
+    """When a solver first appeared: the first log row (generation) in which
+    some evaluated genome met the task's success rule, its ``elapsed_s`` (wall)
+    and the main-thread CPU time up to it, estimated as ``main`` scaled by
+    that row's share of the run's wall time.  With ``stop_on_success`` (Gritz &
+    Hahn's termination) this is when the run would end.  A solver in a
+    generation need not be the run's final best (a later phase's weights may
+    prefer another genome), so this says when the search first had a solution,
+    not that the full run returns one.  None when no genome ever solved.
+    (No Herman task has a curriculum, whose early scenes would not count.)"""
+    import csv
+    with log.open() as f:
+        for row in csv.DictReader(f):
+            if int(row["solved"]) > 0:
+                at = float(row["elapsed_s"])
+                return {"first_solved_gen": int(row["generation"]), "first_solved_wall_s": round(at, 1),
+                        "first_solved_main_cpu_s": round(main * at / wall, 1) if wall > 0 else None}
+    return {"first_solved_gen": None, "first_solved_wall_s": None, "first_solved_main_cpu_s": None}
 
 
 def _crossing(path) -> float:
@@ -125,22 +146,37 @@ def done(path: Path) -> list[dict]:
 def table(rows: list[dict], names) -> str:
     """Per config: solved / runs, median and slowest wall time, the
     main-thread CPU time (the quiet-machine estimate; older rows lack it: -)
-    and how many runs it puts over the bar, and the load average range at the
-    runs' start."""
+    and how many runs it puts over the bar, when a solver first appeared
+    (runs that had one, and their main-thread CPU time up to it; older rows
+    lack it: -), and the load average range at the runs' start."""
     lines = ["| task | solved | median wall (s) | slowest wall (s) | main-thread CPU (s), "
              f"median [min, max] | runs over {BAR_S:.0f} s (main thread) "
-             "| load average at the runs' start |", "|---|---|---|---|---|---|---|"]
+             "| runs with a solver: CPU (s) to the first, median [max] "
+             "| load average at the runs' start |", "|---|---|---|---|---|---|---|---|"]
     for n in names:
         rs = [r for r in rows if r["config"] == n]
         if rs:
-            main = [r["main_cpu_s"] for r in rs if "main_cpu_s" in r]
-            cpu = (f"{np.median(main):.0f} [{min(main):.0f}, {max(main):.0f}]" if main else "-")
             lines.append(f"| {n} | {sum(r['success'] for r in rs)} / {len(rs)} | "
                          f"{np.median([r['wall_s'] for r in rs]):.0f} | "
-                         f"{max(r['wall_s'] for r in rs):.0f} | {cpu} | "
-                         f"{sum(m > BAR_S for m in main) if main else '-'} | "
+                         f"{max(r['wall_s'] for r in rs):.0f} | {_main_cpu(rs)} | "
+                         f"{_first_solver(rs)} | "
                          f"{min(r['load'] for r in rs):.1f}–{max(r['load'] for r in rs):.1f} |")
     return "\n".join(lines)
+
+
+def _main_cpu(rs) -> str:
+    main = [r["main_cpu_s"] for r in rs if "main_cpu_s" in r]
+    if not main:
+        return "- | -"
+    return (f"{np.median(main):.0f} [{min(main):.0f}, {max(main):.0f}] | "
+            f"{sum(m > BAR_S for m in main)}")
+
+
+def _first_solver(rs) -> str:
+    if not all("first_solved_gen" in r for r in rs):
+        return "-"
+    t = [r["first_solved_main_cpu_s"] for r in rs if r["first_solved_gen"] is not None]
+    return f"{len(t)} / {len(rs)}" + (f": {np.median(t):.0f} [{max(t):.0f}]" if t else "")
 
 
 def _settings(items) -> dict:

@@ -25,20 +25,34 @@ def test_benchmark_runs_only_what_its_file_lacks_and_tables_the_file(bench, tmp_
     def fake(name, seed, tmp=None, targets=None, search=None, family=None, params=None):
         calls.append((name, seed))
         assert (targets, search, family, params) == (None, {}, {}, {})      # no overrides given
+        first = 30.0 + 10 * seed if seed != 2 else None
         return {"config": name, "seed": seed, "success": seed != 2, "wall_s": 70.0 + seed, "cpu_s": 100.0,
-                "main_cpu_s": 50.0 + 25 * seed, "load": 2.0, "final_cost": 0.2, "facts": ["x"]}
+                "main_cpu_s": 50.0 + 25 * seed, "load": 2.0, "final_cost": 0.2,
+                "first_solved_gen": None if first is None else 9, "first_solved_main_cpu_s": first,
+                "facts": ["x"]}
 
     monkeypatch.setattr(bench, "run_one", fake)
     assert bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)]) == 0
     assert calls == [("point", 0), ("touch_nose", 1), ("point", 1), ("touch_nose", 2), ("point", 2)]
     table = capsys.readouterr().out
     # wall: medians of 80, 71, 72; main-thread CPU 75, 100 (the old row has none): one over 90 s
-    assert "| touch_nose | 2 / 3 | 72 | 80 | 88 [75, 100] | 1 | 1.5–2.0 |" in table
-    assert "| point | 2 / 3 | 71 | 72 | 75 [50, 100] | 1 | 2.0–2.0 |" in table
+    # first solver: the old row has no such field (-); point's seeds 0, 1 at 30, 40 s, seed 2 none
+    assert "| touch_nose | 2 / 3 | 72 | 80 | 88 [75, 100] | 1 | - | 1.5–2.0 |" in table
+    assert "| point | 2 / 3 | 71 | 72 | 75 [50, 100] | 1 | 2 / 3: 35 [40] | 2.0–2.0 |" in table
     assert len(out.read_text().splitlines()) == 6
     calls.clear()
     bench.main(["--seeds", "3", "--only", "touch_nose,point", "--out", str(out)])
     assert calls == []                                       # all there: nothing re-run
+
+
+def test_first_solver_is_the_first_log_row_with_a_solving_genome(bench, tmp_path):
+    log = tmp_path / "log.csv"
+    log.write_text("generation,solved,elapsed_s\n0,0,10.0\n1,0,20.0\n2,3,40.0\n3,0,50.0\n")
+    # main-thread CPU scaled by the row's share of the run's wall time: 50 * 40 / 100
+    assert bench.first_solver(log, wall=100.0, main=50.0) == {
+        "first_solved_gen": 2, "first_solved_wall_s": 40.0, "first_solved_main_cpu_s": 20.0}
+    log.write_text("generation,solved,elapsed_s\n0,0,10.0\n1,0,20.0\n")
+    assert bench.first_solver(log, wall=100.0, main=50.0)["first_solved_gen"] is None
 
 
 def test_benchmark_names_every_task_and_preset_of_the_bar_and_refuses_unknown(bench, tmp_path, capsys):
