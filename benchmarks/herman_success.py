@@ -40,6 +40,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from gpmotion.records import read_json  # noqa: E402
 from gpmotion.run import RunConfig, run  # noqa: E402
+from gpmotion.task import get_task  # noqa: E402
 
 # Checkpoint interval of the benchmark's runs (s of wall time).  A checkpoint
 # (the population as JSON) costs ~0.5 s of main-thread CPU; `gpmotion run`
@@ -96,7 +97,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
         wall, cpu, main = time.perf_counter() - t0, _cpu() - c0, time.thread_time() - m0
         best = read_json(out / "best.json", kind="best")
         crossing = _crossing(out / "best.json")
-        first = first_solver(out / "log.csv", wall, main)
+        first = first_solver(out / "log.csv", wall, main, get_task(task, **params))
     return {"config": name, "seed": seed, "targets": family.get("targets", "task default"),
             **({"search": search} if search else {}),
             **({"params": extra} if extra else {}),
@@ -108,7 +109,7 @@ def run_one(name: str, seed: int, tmp: str | None = None, targets: str | None = 
             **first, "facts": best.get("facts", [])}
 
 
-def first_solver(log: Path, wall: float, main: float) -> dict:
+def first_solver(log: Path, wall: float, main: float, task=None) -> dict:
     """When a solver first appeared: the first log row (generation) in which
     some evaluated genome met the task's success rule, its ``elapsed_s`` (wall)
     and the main-thread CPU time up to it, estimated as ``main`` scaled by
@@ -117,11 +118,14 @@ def first_solver(log: Path, wall: float, main: float) -> dict:
     generation need not be the run's final best (a later phase's weights may
     prefer another genome), so this says when the search first had a solution,
     not that the full run returns one.  None when no genome ever solved.
-    (No Herman task has a curriculum, whose early scenes would not count.)"""
+    Under ``task``'s curriculum a row counts only once the scene is the final
+    one (a genome solving an earlier, easier scene solves nothing asked; as
+    stop_on_success)."""
     import csv
     with log.open() as f:
         for row in csv.DictReader(f):
-            if int(row["solved"]) > 0:
+            staged = task is not None and task.staged(float(row["progress"])) != task.staged(1.0)
+            if int(row["solved"]) > 0 and not staged:
                 at = float(row["elapsed_s"])
                 return {"first_solved_gen": int(row["generation"]), "first_solved_wall_s": round(at, 1),
                         "first_solved_main_cpu_s": round(main * at / wall, 1) if wall > 0 else None}

@@ -18,13 +18,15 @@ for the default terminal set.
 import numpy as np
 
 from gpmotion.model import make_scene
-from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, TrunkCheck
+from gpmotion.task import Ease, Term, register_task
+from gpmotion.tasks._herman import GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, SelfContact, TrunkCheck
 from gpmotion.tasks.herman_touch_object import HermanTouchObject
 
 FELL = 0.20            # m: the pelvis dropped this much
 STEADY = 0.05          # m: largest pelvis excursion of a success
 FOOT_FORCES = ("force_heel_r", "force_toe_r", "force_heel_l", "force_toe_l")
+START = (0.45, -0.15, 0.05)    # pelvis frame (m): v4's object at the run's start, low in front
+EASE = (0.0, 0.7)              # run progress over which v4's object travels to its place
 
 
 @register_task
@@ -95,3 +97,36 @@ class HermanReachStandingV3(TrunkCheck, HermanReachStandingV2):
     session 15 found v2's seed 0 with the forearm 8.3 cm
     into the trunk).  docs/notes/herman.md, session 16."""
     version = 3
+
+
+@register_task
+class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
+    """v4: the nose's recipe (the right forearm and hand collide with the
+    trunk, angle targets, the last 20 of the 50 generations polish, the rest
+    term x3) and a curriculum on the object's place: it starts low in front
+    (``START``, where the arm swung forward from hanging meets it first) and
+    travels in a straight line to its place over the first half of the run.
+    The recipe alone left seeds settled 9-10 cm short with the arm folded, a
+    pose no search leaves (session 18: 3 / 5; its misses never touched).
+    docs/notes/herman.md, session 21."""
+    version = 4
+    gp_targets = "angle"
+    gp_defaults = {**GP_DEFAULTS, "polish": 20}
+    params = {**HermanReachStandingV3.params, "w_rest": 3.0, "travel": 1.0, "travel_start": 0.0}
+    bounds = {**HermanReachStandingV3.bounds, "travel": (0, 1), "travel_start": (0, 1)}
+    param_docs = {**HermanReachStandingV3.param_docs,
+                  "travel": f"the object's place as a fraction of the way from {START} (pelvis "
+                            "frame, m) to its target (x, y, z or the preset); 1: at the target",
+                  "travel_start": "where on that way the object starts the run (the "
+                                  "curriculum's start); 1: no curriculum"}
+
+    @property
+    def curriculum(self):
+        return {"travel": Ease(float(self.params["travel_start"]), EASE,
+                               doc="the object travels from low in front to its place")}
+
+    def object_position(self) -> np.ndarray:
+        end = super().object_position()
+        m = self.figure.model
+        start = m.fixed_pos + m.fixed_rot @ np.array(START, float)
+        return start + self.params["travel"] * (end - start)

@@ -97,7 +97,8 @@ class HermanTouchObject(HermanTask):
         return goal_scene(self.object_position())     # senses: fingertip − object
 
     def measure(self, traj):
-        d = np.linalg.norm(traj.site("fingertip_r") - self.object_position(), axis=-1)
+        # the object of the episode's own scene: a curriculum moves it (reach_standing-v4)
+        d = np.linalg.norm(traj.site("fingertip_r") - traj.scene.goal3, axis=-1)
         out = {"object": d[:, -1] + 0.5 * d[:, tail(traj, HOLD)].mean(axis=1), "object_end": d[:, -1]}
         out["limits"] = on_limits(traj, self.controlled, HOLD)
         out.update(style_measures(traj))
@@ -107,10 +108,10 @@ class HermanTouchObject(HermanTask):
         return m["object_end"] < TOUCH
 
     def describe(self, traj, m):
-        d = np.linalg.norm(traj.site("fingertip_r")[0] - self.object_position(), axis=-1)
+        d = np.linalg.norm(traj.site("fingertip_r")[0] - traj.scene.goal3, axis=-1)
         near = d < TOUCH
         first = f"{traj.times[near.argmax()]:.2f} s" if near.any() else "never"
-        rel = self.object_position() - self.figure.model.fixed_pos
+        rel = traj.scene.goal3 - self.figure.model.fixed_pos
         return [f"object at ({rel[0]:.2f}, {rel[1]:.2f}, {rel[2]:.2f}) m from the pelvis: "
                 f"fingertip {d[-1] * 100:.1f} cm away at the end; first touch {first}",
                 f"fingertip speed over the last 0.1 s ≤ {m['end_speed'][0] * 100:.1f} cm/s"]

@@ -643,3 +643,44 @@ def test_touch_nose_v3_is_the_session_17_trial():
     assert new.version == 3
     _assert_same_search_with_self_contact(new, trial)
     assert new.success_threshold == trial.success_threshold
+
+
+def test_reach_standing_v4_is_v3_with_the_nose_recipe_and_a_travelling_object():
+    """herman_reach_standing-v4 = v3 with self-contact, angle targets, polish
+    20 and the rest term x3 (the session 18 trial), plus the curriculum: the
+    object starts at START (pelvis frame) and travels in a line to its place
+    over EASE of the run; travel_start=1 keeps it in place."""
+    from gpmotion.tasks.herman_reach_standing import EASE, START
+    v4 = get_task("herman_reach_standing")
+    v3 = get_task("herman_reach_standing-v3", w_rest=3.0)
+    assert v4.version == 4
+    _assert_same_search_with_self_contact(v4, _with_recipe(v3, "angle", 20))
+    m = v4.figure.model
+    start = m.fixed_pos + m.fixed_rot @ np.array(START)
+    place = v3.object_position()
+    assert np.array_equal(v4.scene_at(0.0).goal3, start)
+    assert np.array_equal(v4.scene_at(EASE[1]).goal3, place)
+    mid = v4.scene_at(EASE[1] / 2).goal3
+    assert np.allclose(mid, (start + place) / 2)
+    still = get_task("herman_reach_standing", travel_start=1.0)
+    assert np.array_equal(still.scene_at(0.0).goal3, place)
+
+
+def _with_recipe(task, targets, polish):
+    task.gp_targets, task.gp_defaults = targets, {**task.gp_defaults, "polish": polish}
+    return task
+
+
+def test_touch_object_measures_the_object_of_the_episodes_scene():
+    """Under a curriculum the object moves: a run's distance is measured to
+    the object its episode had (the staged scene), not the final place."""
+    from gpmotion.controllers import schedule
+    task = get_task("herman_reach_standing", seconds=0.2)
+    hold = schedule.constant(task.figure.model.neutral)
+    for progress in (0.0, 1.0):
+        scene = task.scene_at(progress)
+        tr = gpmotion.rollout(task.figure, scene, hold, n_steps=task.n_steps, dt=task.dt,
+                              record_every=task.record_every)
+        d = np.linalg.norm(tr.site("fingertip_r")[0, -1] - scene.goal3)
+        assert task.measure(tr)["object_end"][0] == pytest.approx(d, abs=1e-12)
+    assert not np.allclose(task.scene_at(0.0).goal3, task.scene_at(1.0).goal3)

@@ -55,6 +55,19 @@ def test_first_solver_is_the_first_log_row_with_a_solving_genome(bench, tmp_path
     assert bench.first_solver(log, wall=100.0, main=50.0)["first_solved_gen"] is None
 
 
+def test_first_solver_counts_no_genome_that_solved_a_curriculums_easier_scene(bench, tmp_path):
+    """herman_reach_standing-v4 moves its object over the first half of a run:
+    a solver at progress 0.2 solved a scene the task does not ask for."""
+    from gpmotion.task import get_task
+    task = get_task("herman_reach_standing")
+    assert task.curriculum
+    log = tmp_path / "log.csv"
+    log.write_text("generation,progress,solved,elapsed_s\n0,0.0,0,10.0\n1,0.2,4,20.0\n"
+                   "2,0.6,0,40.0\n3,0.8,1,50.0\n")
+    assert bench.first_solver(log, wall=100.0, main=50.0)["first_solved_gen"] == 1     # no task
+    assert bench.first_solver(log, wall=100.0, main=50.0, task=task)["first_solved_gen"] == 3
+
+
 def test_benchmark_names_every_task_and_preset_of_the_bar_and_refuses_unknown(bench, tmp_path, capsys):
     from gpmotion.task import get_task
     assert set(bench.CONFIGS) == {"touch_nose", "touch_object/0", "touch_object/1", "touch_object/2",
