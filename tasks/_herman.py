@@ -54,6 +54,9 @@ MAIN_WEIGHT = 10.0
 # 2/5 to 4/5 seeds at 250 × 40, and seed 0 (3.6 cm at 250 × 40) reaches the
 # nose at 400 × 50.
 GP_DEFAULTS = {"population": 400, "generations": 50, "p_crossover": 0.85, "p_creep": 0.1}
+# The nose's search (herman_touch_nose, session 12): angle targets, and the last
+# 20 of the 50 generations polish the best; the versions that take it name it.
+NOSE_SEARCH = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}}
 
 
 # Pictures of an arm task: the upper body, seen from the front right (mostly its

@@ -21,7 +21,8 @@ import numpy as np
 
 from gpmotion.model import make_scene
 from gpmotion.task import Ease, Term, register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, MAIN_WEIGHT, TERMINALS, SelfContact, TrunkCheck
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, NOSE_SEARCH, TERMINALS, SelfContact,
+                                    TrunkCheck)
 from gpmotion.tasks.herman_touch_object import HermanTouchObject
 
 FELL = 0.20            # m: the pelvis dropped this much
@@ -116,8 +117,7 @@ class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
     (3 / 5), which the heavier through term charges.  Session 21, 5 seeds:
     4 / 5 in 78-100 s of main-thread CPU.  docs/notes/herman.md."""
     version = 4
-    gp_targets = "angle"
-    gp_defaults = {**GP_DEFAULTS, "polish": 20}
+    gp_targets, gp_defaults = NOSE_SEARCH["gp_targets"], NOSE_SEARCH["gp_defaults"]
     terms = tuple(replace(t, param="w_through") if t.name == "through" else t
                   for t in HermanReachStandingV3.terms)
     params = {**HermanReachStandingV3.params, "w_rest": 3.0, "w_through": 3.0, "travel": 1.0,

@@ -21,7 +21,7 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask,
+from gpmotion.tasks._herman import (ARM, GP_DEFAULTS, MAIN_WEIGHT, NOSE_SEARCH, REST_RULE, HermanTask,
                                     SelfContact, TrunkCheck, goal_scene,
                                     rest_scaled, site_at_rest, style_measures, style_terms, tail)
 
@@ -170,7 +170,7 @@ class HermanTouchV2(HermanTouch):
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
     # The nose keeps herman_touch_nose's recipe: rate targets failed there (0 / 5,
     # elbow and wrists driven onto their limits), angles with 20 of polish 4 / 5
-    ANGLE = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}, "w_rest": 1.0}
+    ANGLE = {**NOSE_SEARCH, "w_rest": 1.0}
     ANGLE_SITES = ("nose",)            # the sites that take the ANGLE recipe
 
     def __init__(self, **overrides):

@@ -12,7 +12,7 @@ little, spend little work, end at rest.
 from dataclasses import replace
 
 from gpmotion.task import register_task
-from gpmotion.tasks._herman import GP_DEFAULTS, SelfContact, TrunkCheck
+from gpmotion.tasks._herman import NOSE_SEARCH, SelfContact, TrunkCheck
 from gpmotion.tasks.herman_touch import HermanTouch
 
 
@@ -25,7 +25,7 @@ class HermanTouchNose(HermanTouch):
     goal_label = "nose at rest"    # pictures: the scene goal, captioned
     # The last 20 of the 50 generations tune the best controller (--polish; memetic GP):
     # session 12, 5 seeds, 4/5 (10 of 50: 3/5; none: 2/5); docs/notes/herman.md.
-    gp_defaults = {**GP_DEFAULTS, "polish": 20}
+    gp_defaults = NOSE_SEARCH["gp_defaults"]
 
     @property
     def site(self) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 
 from gpmotion.sim import geometry3d
 from gpmotion.task import Term, register_task
-from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, REST_RULE, HermanTask, TrunkCheck,
+from gpmotion.tasks._herman import (GP_DEFAULTS, MAIN_WEIGHT, NOSE_SEARCH, REST_RULE, HermanTask, TrunkCheck,
                                     goal_scene, on_limits, with_self_contact,
                                     rest_scaled, style_measures, style_terms, tail)
 
@@ -153,7 +153,7 @@ class HermanTouchObjectV4(HermanTouchObjectV3):
     18, stopped), against v3's 5 / 5 and 5 / 5.  docs/notes/herman.md."""
     version = 4
     CONTACT_PRESETS = (1,)           # the presets on the nose's recipe
-    RECIPE = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}}
+    RECIPE = NOSE_SEARCH
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
