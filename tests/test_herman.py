@@ -647,8 +647,8 @@ def test_touch_nose_v3_is_the_session_17_trial():
 
 def test_reach_standing_v4_is_v3_with_the_nose_recipe_and_a_travelling_object():
     """herman_reach_standing-v4 = v3 with self-contact, angle targets, polish
-    20, the rest and through terms x3 (the session 21 trial,
-    docs/notes/herman_s21_trials.py v4x/reach), plus the curriculum: the
+    20, the rest and through terms x3 (the session 21 search whose rate
+    docs/notes/herman.md records), plus the curriculum: the
     object starts at START (pelvis frame) and travels in a line to its place
     over EASE of the run; travel_start=1 keeps it in place."""
     from gpmotion.tasks.herman_reach_standing import EASE, START
