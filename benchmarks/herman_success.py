@@ -122,9 +122,10 @@ def first_solver(log: Path, wall: float, main: float, task=None) -> dict:
     one (a genome solving an earlier, easier scene solves nothing asked; as
     stop_on_success)."""
     import csv
+    final = None if task is None else task.staged(1.0)
     with log.open() as f:
         for row in csv.DictReader(f):
-            staged = task is not None and task.staged(float(row["progress"])) != task.staged(1.0)
+            staged = final is not None and task.staged(float(row["progress"])) != final
             if int(row["solved"]) > 0 and not staged:
                 at = float(row["elapsed_s"])
                 return {"first_solved_gen": int(row["generation"]), "first_solved_wall_s": round(at, 1),

@@ -136,7 +136,5 @@ class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
                                doc="the object travels from low in front to its place")}
 
     def object_position(self) -> np.ndarray:
-        end = super().object_position()
-        m = self.figure.model
-        start = m.fixed_pos + m.fixed_rot @ np.array(START, float)
+        end, start = super().object_position(), self.pelvis_point(START)
         return start + self.params["travel"] * (end - start)

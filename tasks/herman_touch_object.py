@@ -79,8 +79,13 @@ class HermanTouchObject(HermanTask):
     def object_position(self) -> np.ndarray:
         """World position of the object."""
         t = int(self.params["target"])
-        rel = np.array(PRESETS[t] if t >= 0 else (self.params["x"], self.params["y"], self.params["z"]), float)
-        return self.figure.model.fixed_pos + self.figure.model.fixed_rot @ rel
+        return self.pelvis_point(PRESETS[t] if t >= 0 else
+                                 (self.params["x"], self.params["y"], self.params["z"]))
+
+    def pelvis_point(self, rel) -> np.ndarray:
+        """World position of a point given in the pelvis frame at the start."""
+        m = self.figure.model
+        return m.fixed_pos + m.fixed_rot @ np.array(rel, float)
 
     def __init__(self, **overrides):
         preset = _preset(overrides.get("target", type(self).params["target"]))

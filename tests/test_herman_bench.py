@@ -56,7 +56,7 @@ def test_first_solver_is_the_first_log_row_with_a_solving_genome(bench, tmp_path
 
 
 def test_first_solver_counts_no_genome_that_solved_a_curriculums_easier_scene(bench, tmp_path):
-    """herman_reach_standing-v4 moves its object over the first half of a run:
+    """herman_reach_standing-v4 moves its object over the first 70 % of a run:
     a solver at progress 0.2 solved a scene the task does not ask for."""
     from gpmotion.task import get_task
     task = get_task("herman_reach_standing")
