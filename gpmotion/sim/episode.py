@@ -18,7 +18,7 @@ the ``schedule`` controller runs.  The controller contract is in
 import numpy as np
 from numba import njit, prange
 
-from gpmotion.sim.borrow import borrowed
+from gpmotion.sim.borrow import borrowed, hold
 from gpmotion.sim.backend import JIT, advance, observe, save_contact, store_object, workspace  # backend
 from gpmotion.controllers.schedule_kernel import control as ctrl_control, init as ctrl_init  # controller
 
@@ -27,14 +27,14 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     """Simulate episode ``e`` of the batch."""
     n_steps = start.n_steps[e]
     M, S = borrowed(M), borrowed(S)   # the model and scene outlive the call: uncounted
-    q = start.q0[e].copy()
-    qd = start.qd0[e].copy()
     contact = start.contact[e]
-    ci, cf, cstate = prog.ci[e], prog.cf[e], prog.cstate[e]
-    out_q, out_qd, out_com, out_cforce = out.q[e], out.qd[e], out.com[e], out.contact_force[e]
-    out_pole, out_impact, out_energy = out.pole_hit[e], out.impact[e], out.energy[e]
-    out_targets, out_senses, status = out.targets[e], out.senses[e], out.status[e]
-    out_obj = out.obj[e]
+    # views of the caller's arrays, uncounted (the caller holds them past the call)
+    ci, cf, cstate = borrowed((prog.ci[e], prog.cf[e], prog.cstate[e]))
+    out_q, out_qd, out_com, out_cforce = borrowed((out.q[e], out.qd[e], out.com[e],
+                                                   out.contact_force[e]))
+    out_pole, out_impact, out_energy = borrowed((out.pole_hit[e], out.impact[e], out.energy[e]))
+    out_targets, out_senses, status = borrowed((out.targets[e], out.senses[e], out.status[e]))
+    out_obj = borrowed((out.obj[e],))[0]
     has_obj = S.obj.shape[0] > 0
     dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
     record_senses = st.record_senses
@@ -42,16 +42,13 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
     neutral = M.neutral
-    owned = workspace(M, S, qd.shape[0], contact)
+    owned = workspace(M, S, start.qd0.shape[1], contact)
     work = borrowed(owned)         # uncounted views (gpmotion.sim.borrow); owned lives to the end
-    cforce = np.zeros(nc)
-    com = np.zeros(out_com.shape[1])
-    senses_all = np.zeros(ns + 1)  # + a scratch entry for the body slots a layout leaves out
-    senses = senses_all[:ns]
-    senses_norm = np.zeros(ns)
-    targets = np.zeros(na)
-    taus = np.zeros(na)
-    max_cf = np.zeros(nc)
+    # the state and the loop's scratch, held by ``own`` to the end and used uncounted
+    own = (start.q0[e].copy(), start.qd0[e].copy(), np.zeros(nc), np.zeros(out_com.shape[1]),
+           np.zeros(ns + 1), np.zeros(ns), np.zeros(na), np.zeros(na), np.zeros(nc))
+    q, qd, cforce, com, senses_all, senses_norm, targets, taus, max_cf = borrowed(own)
+    senses = senses_all[:ns]       # senses_all: + a scratch entry for the body slots a layout leaves out
     max_pole = 0.0
     max_impact = 0.0
     energy = 0.0
@@ -102,6 +99,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             status[1] = step
             break
     save_contact(owned, contact)
+    hold(own)
     # an episode that ended early (diverged, or shorter) holds its last frame
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
