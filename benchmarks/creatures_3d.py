@@ -266,8 +266,13 @@ def main(argv=None) -> int:
     t.add_argument("--task", default="bob_walk", help="the bob_walk version to replay under")
     t.add_argument("--touchdowns", action="store_true", help="list every touchdown")
     a = p.parse_args(argv)
-    return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
-            "curves": curves, "steps": steps}[a.cmd](a)
+    from gpmotion.records import ConfigError, FormatError
+    try:
+        return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
+                "curves": curves, "steps": steps}[a.cmd](a)
+    except (FormatError, ConfigError) as e:     # a bad run path or file: one line, exit 2
+        print(f"creatures_3d.py: {e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
