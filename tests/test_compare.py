@@ -116,3 +116,17 @@ def _check_compare(tmp_path, budget):
 def test_phase_window():
     assert phase_window(get_task("lamp_hop")) == (0.1, 0.8)
     assert phase_window(get_task("lamp_limbo"))[0] == 0.1
+
+
+def test_the_table_says_how_many_runs_found_a_solver_beside_the_best_controllers_success():
+    """A run can meet a solver its best by cost is not (Cujo's GP, session 22): the
+    table must not show a median of first solvers under a 0 % success without the count."""
+    from gpmotion.compare import summarize, table_markdown
+    runs = [{"family": "gp", "seed": s, "final_cost": -1.0, "success": False, "wall_s": 1.0,
+             "first_success": f} for s, f in enumerate([None, 8444, None, 5764, None])]
+    row, = summarize(runs)
+    assert row["success_rate"] == 0.0 and row["runs_with_solver"] == 2
+    line = table_markdown([row]).splitlines()[2]
+    assert "| 0% | 2 / 5: 7,104 |" in line
+    none = [dict(r, first_success=None) for r in runs]
+    assert "| 0% | 0 / 5 |" in table_markdown(summarize(none)).splitlines()[2]
