@@ -33,8 +33,8 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     out_q, out_qd, out_com, out_cforce = borrowed((out.q[e], out.qd[e], out.com[e],
                                                    out.contact_force[e]))
     out_pole, out_impact, out_energy = borrowed((out.pole_hit[e], out.impact[e], out.energy[e]))
-    out_targets, out_senses, status = borrowed((out.targets[e], out.senses[e], out.status[e]))
-    out_obj = borrowed((out.obj[e],))[0]
+    out_targets, out_senses, status, out_obj = borrowed((out.targets[e], out.senses[e],
+                                                         out.status[e], out.obj[e]))
     has_obj = S.obj.shape[0] > 0
     dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
     record_senses = st.record_senses
@@ -44,10 +44,10 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     neutral = M.neutral
     owned = workspace(M, S, start.qd0.shape[1], contact)
     work = borrowed(owned)         # uncounted views (gpmotion.sim.borrow); owned lives to the end
-    # the state and the loop's scratch, held by ``own`` to the end and used uncounted
-    own = (start.q0[e].copy(), start.qd0[e].copy(), np.zeros(nc), np.zeros(out_com.shape[1]),
-           np.zeros(ns + 1), np.zeros(ns), np.zeros(na), np.zeros(na), np.zeros(nc))
-    q, qd, cforce, com, senses_all, senses_norm, targets, taus, max_cf = borrowed(own)
+    # the state and the loop's scratch, held by ``scratch`` to the end and used uncounted
+    scratch = (start.q0[e].copy(), start.qd0[e].copy(), np.zeros(nc), np.zeros(out_com.shape[1]),
+               np.zeros(ns + 1), np.zeros(ns), np.zeros(na), np.zeros(na), np.zeros(nc))
+    q, qd, cforce, com, senses_all, senses_norm, targets, taus, max_cf = borrowed(scratch)
     senses = senses_all[:ns]       # senses_all: + a scratch entry for the body slots a layout leaves out
     max_pole = 0.0
     max_impact = 0.0
@@ -99,7 +99,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             status[1] = step
             break
     save_contact(owned, contact)
-    hold(own)
+    hold(scratch)
     # an episode that ended early (diverged, or shorter) holds its last frame
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
