@@ -34,6 +34,11 @@ Configurations (``CONFIGS``; the paper's expected gait in brackets):
                   no-slip ground (friction 5: the paper's pinned contacts, approximated)
   beryl-periodic-t02, -t03, -t075, -t1, -tau03, -tau04  Beryl's periodic shuffle
                   at other periods t_per and τ floors
+  star-contact-two, star-sense-contact-two, beryl-periodic-two  the shuffle
+                  configurations with at most two contact points touching at once
+                  (the paper's §2.1 assumption; ``[ground] max_contacts = 2``)
+  star-contact-low, beryl-periodic-low (and -two)  + max_height weighted -2:
+                  rising above the start height costs (against short hops)
   beryl-*-unguided  the same two without a secondary term (the paper names none for
                   Beryl; unguided, our Beryl hops)
 Runs are queued seed-major (every configuration's seed 0 first), so a study
@@ -117,6 +122,33 @@ CONFIGS = {
     "star-contact-w4": ("starman_travel", "bsr-time", {"w_contact_distance": 4.0}, {},
                         ("shuffle", "periodic shuffle"), "Star-Man time-based + contact_distance (w 4)"),
     "beryl-periodic-w4": _beryl_periodic(weight=4.0),
+    # the paper's "only two endpoints can be in contact with the ground" (§2.1)
+    "star-contact-two": ("starman_travel", "bsr-time",
+                         {"w_contact_distance": 2.0, "figure": "two:starman"}, {},
+                         ("shuffle", "periodic shuffle"),
+                         "Star-Man time-based + contact_distance (w 2), two contacts at most"),
+    "star-sense-contact-two": ("starman_travel", "bsr-sense",
+                               {"w_contact_distance": 2.0, "figure": "two:starman"}, {"rules": 10},
+                               ("shuffle", "periodic shuffle"),
+                               "Star-Man sense-based R=10 + contact_distance (w 2), two contacts at most"),
+    "beryl-periodic-two": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0, "figure": "two:beryl"},
+                           {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                           "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2), τ ≥ 0.2 s, two contacts at most"),
+    # Table 3's max_height weighted negative: rising above the start height costs
+    "star-contact-low": ("starman_travel", "bsr-time", {"w_contact_distance": 2.0, "w_max_height": -2.0}, {},
+                         ("shuffle", "periodic shuffle"),
+                         "Star-Man time-based + contact_distance (w 2) + max_height (w -2)"),
+    "beryl-periodic-low": ("beryl_travel", "bsr-time", {"w_contact_distance": 2.0, "w_max_height": -2.0},
+                           {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                           "Beryl time-based, t_per = 0.5 s, + contact_distance (w 2) + max_height (w -2), τ ≥ 0.2 s"),
+    "star-contact-low-two": ("starman_travel", "bsr-time",
+                             {"w_contact_distance": 2.0, "w_max_height": -2.0, "figure": "two:starman"}, {},
+                             ("shuffle", "periodic shuffle"),
+                             "Star-Man time-based + contact_distance (w 2) + max_height (w -2), two contacts at most"),
+    "beryl-periodic-low-two": ("beryl_travel", "bsr-time",
+                               {"w_contact_distance": 2.0, "w_max_height": -2.0, "figure": "two:beryl"},
+                               {"t_per": 0.5, "bsr_dt": 0.1}, ("periodic shuffle",),
+                               "Beryl t_per = 0.5 s + contact_distance (w 2) + max_height (w -2), τ ≥ 0.2 s, two contacts at most"),
     # the paper's Beryl configurations name no secondary term; unguided, ours hops
     "beryl-tumble-unguided": ("beryl_travel", "bsr-time", {}, {}, ("tumble",),
                               "Beryl time-based, t_per = T, unguided"),
@@ -137,7 +169,7 @@ def _fail(msg: str) -> None:
 
 NOSLIP_MU = 5.0
 # figure = "VARIANT:NAME": figure NAME on another ground
-GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU}}
+GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU}, "two": {"max_contacts": 2}}
 
 
 def _resolved(params: dict) -> dict:

@@ -148,6 +148,7 @@ class Scene(NamedTuple):
     goal_y: float = 0.0     # its y: a 3-D figure's goal is (goal[0], goal_y, goal[1])
     obj: np.ndarray = np.zeros(0)   # a free object, its table and grip (gpmotion.sim.grip3d); empty: none
     selfc: np.ndarray = np.zeros((0, 4))   # self-contact pairs (gpmotion.sim.selfcontact3d); empty: none
+    max_contacts: int = 0   # planar: only the deepest N points touch the ground (Auslander's 2); 0: all
 
     @property
     def goal3(self) -> np.ndarray:
@@ -157,7 +158,8 @@ class Scene(NamedTuple):
 
 def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                c_ground=60.0, mu=0.8, k_tangent=5000.0, c_tangent=60.0,
-               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=(), selfc=()) -> Scene:
+               poles=(), k_pole=5000.0, c_pole=50.0, goal=(0.0, 0.0), obj=(), selfc=(),
+               max_contacts=0) -> Scene:
     """A Scene with the defaults every shipped figure is stable with at dt=1 ms.
 
     ``goal``: (x, z) for planar figures, or (x, y, z) (a 3-D figure's senses
@@ -166,6 +168,9 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
     (``gpmotion.sim.grip3d.object_params``); empty: none.
     ``selfc``: capsule pairs of a 3-D figure that collide with each other
     (``gpmotion.sim.selfcontact3d.self_contact_pairs``); empty: none.
+    ``max_contacts``: planar figures only; N > 0 lets only the N most deeply
+    penetrating contact points touch the ground each step, the others pass
+    through it (Auslander et al. §2.1 assume two); 0: every point.
     """
     goal = np.asarray(goal, dtype=np.float64).reshape(-1)
     if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
@@ -178,11 +183,14 @@ def make_scene(*, gravity=9.81, ground=True, ground_z=0.0, k_ground=5000.0,
                     ("k_pole", k_pole), ("c_pole", c_pole)):
         if not np.isfinite(v) or v < 0:
             raise ValueError(f"scene: {name} must be a finite number >= 0, got {v!r}")
+    if isinstance(max_contacts, bool) or not isinstance(max_contacts, (int, np.integer)) or max_contacts < 0:
+        raise ValueError(f"scene: max_contacts must be an integer >= 0 (0: every point), got {max_contacts!r}")
     if not np.all(np.isfinite(poles)) or np.any(poles[:, 2] <= 0):
         raise ValueError("scene: poles need finite x, z and a radius > 0")
     return Scene(float(gravity), int(bool(ground)), float(ground_z), float(k_ground),
                  float(c_ground), float(mu), float(k_tangent), float(c_tangent),
-                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj), _selfc(selfc))
+                 poles, float(k_pole), float(c_pole), goal, goal_y, _object(obj), _selfc(selfc),
+                 int(max_contacts))
 
 
 def _object(obj) -> np.ndarray:

@@ -88,6 +88,39 @@ def test_box_rests_at_the_height_the_springs_predict():
     assert tr.contact_force[0, -1].sum() == pytest.approx(2.0 * 9.81, rel=1e-4)
 
 
+@pytest.mark.parametrize("max_contacts", [0, 2])
+def test_a_contact_limit_rests_a_box_on_that_many_points_carrying_its_weight(max_contacts):
+    """Four points along the bottom: unlimited, the four share the weight;
+    with max_contacts = 2 two points carry it all, sinking twice as deep."""
+    spec = F.box(mass=2.0)
+    spec["contacts"] += [{"name": f"mid{k}", "body": "b", "position": [x, 0.0]}
+                         for k, x in enumerate((-0.07, 0.07))]
+    spec["ground"] = {"max_contacts": max_contacts}
+    fig = gpmotion.load_figure(spec)
+    scene = gpmotion.make_scene(k_ground=5000.0, max_contacts=max_contacts)
+    tr = gpmotion.simulate(fig, 3.0, scene=scene)
+    assert ((tr.contact_force[0] > 0).sum(axis=1) <= (max_contacts or 4)).all()
+    down = (tr.contact_force[0, -1] > 0).sum()
+    assert down == (max_contacts or 4)
+    assert tr.contact_force[0, -1].sum() == pytest.approx(2.0 * 9.81, rel=1e-3)
+    assert np.abs(tr.qd[0, -50:]).max() < 1e-3
+    sink = -tr.q[0, -1, 1] if max_contacts == 0 else None
+    if sink is not None:
+        assert sink == pytest.approx(2.0 * 9.81 / (4 * 5000.0), rel=1e-3)
+
+
+def test_a_contact_limit_is_refused_where_it_cannot_apply():
+    with pytest.raises(ValueError, match="max_contacts"):
+        gpmotion.make_scene(max_contacts=-1)
+    with pytest.raises(ValueError, match="max_contacts"):
+        gpmotion.make_scene(max_contacts=1.5)
+    spec3 = planar_spec_to_3d(F.box(mass=2.0))
+    with pytest.raises(gpmotion.SpecError, match="planar figures only"):
+        gpmotion.load_figure({**spec3, "ground": {"max_contacts": 2}})
+    with pytest.raises(ValueError, match="planar figures only"):
+        gpmotion.simulate(gpmotion.load_figure(spec3), 0.01, scene=gpmotion.make_scene(max_contacts=2))
+
+
 def test_sliding_box_decelerates_at_mu_g():
     mu, v0 = 0.5, 2.0
     fig = gpmotion.load_figure(F.box(mass=2.0, z0=-0.002))

@@ -167,6 +167,31 @@ def test_ground_contacts_match_reference(name, M):
 
 
 @pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
+def test_ground_contacts_with_a_contact_limit_match_reference(name, M):
+    """Auslander's "only two endpoints can be in contact": the kernel lets the
+    N deepest points touch, as the twin does; the cases were exercised."""
+    rng = np.random.default_rng(14)
+    nc = len(M.cp_link)
+    limited = 0
+    for n_max in (1, 2):
+        scene = gpmotion.make_scene(mu=0.6, k_tangent=4000.0, max_contacts=n_max)
+        for _ in range(40):
+            q, qd = random_state(M, rng)
+            pose, X, v, cbias, cs = run_kinematics(M, q, qd)
+            sc = scene._replace(ground_z=float(rng.uniform(-0.1, 0.6)))
+            anchor, touching = rng.uniform(-1, 1, nc), (rng.random(nc) < 0.5).astype(float)
+            fext, cforce = np.zeros((len(M.parent), 3)), np.zeros(nc)
+            a_k, t_k = anchor.copy(), touching.copy()
+            planar.ground_contacts(M, sc, pose, cs, v, a_k, t_k, fext, cforce)
+            rf, rc, ra, rt = ref.ground_contacts(M, sc, q, qd, anchor, touching)
+            assert close(fext, rf) and close(cforce, rc) and close(a_k, ra) and np.array_equal(t_k, rt)
+            assert (cforce > 0).sum() <= n_max
+            unlimited = ref.ground_contacts(M, sc._replace(max_contacts=0), q, qd, anchor, touching)[1]
+            limited += int((unlimited > 0).sum() > n_max)
+    assert nc < 2 or limited > 5
+
+
+@pytest.mark.parametrize("name, M", FIGURES, ids=IDS)
 def test_mechanical_energy_matches_reference(name, M):
     rng = np.random.default_rng(13)
     scene = gpmotion.make_scene()

@@ -236,7 +236,7 @@ def compile_spec3d(spec: dict, sense_ranges=None) -> Figure:
     if not isinstance(spec, dict):
         raise SpecError("a figure spec must be a table/dict")
     name, raw_bodies, bodies = _name_and_bodies(spec, _body3d)
-    check_ground(spec)
+    check_ground(spec, planar=False)
     root = spec.get("root", {})
     if not isinstance(root, dict):
         raise SpecError("root: must be a table")

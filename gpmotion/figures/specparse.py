@@ -18,17 +18,25 @@ class SpecError(ValueError):
 PLANAR_AXIS = (0.0, -1.0, 0.0)   # CCW in the x–z plane seen with x right, z up
 
 
-GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent")
+GROUND_KEYS = ("k_ground", "c_ground", "mu", "k_tangent", "c_tangent", "max_contacts")
 
 
-def check_ground(spec: dict) -> None:
-    """A spec's optional ``[ground]``: positive numbers for make_scene's ground keys."""
+def check_ground(spec: dict, planar: bool = True) -> None:
+    """A spec's optional ``[ground]``: positive numbers for make_scene's ground
+    keys (``mu`` may be 0; ``max_contacts`` an integer >= 0, planar figures only)."""
     g = spec.get("ground", {})
     if not isinstance(g, dict):
         raise SpecError("ground: must be a table of " + ", ".join(GROUND_KEYS))
     for k in g:
         if k not in GROUND_KEYS:
             raise SpecError(f"ground: unknown key {k!r}; known: {', '.join(GROUND_KEYS)}")
+        if k == "max_contacts":
+            v = g[k]
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise SpecError(f"ground: 'max_contacts' must be an integer >= 0 (0: every point), got {v!r}")
+            if v and not planar:
+                raise SpecError("ground: 'max_contacts' applies to planar figures only")
+            continue
         _num(g, k, "ground", positive=k != "mu", lo=0.0)
 
 

@@ -285,6 +285,34 @@ def apply_point_force(cs, fext, link, px, pz, fx, fz):
     fext[link, 2] += lz
 
 
+_CHOSEN = 1e300
+
+
+@njit(**_INLINE)
+def _deepest(M, pose, cs, fth, fx, fz, ground_z, nmax, mark):
+    """Mark (``_CHOSEN``) the ``nmax`` most deeply penetrating contact points.
+
+    Auslander et al. §2.1: "only two endpoints can be in contact with the
+    ground simultaneously"; the others pass through it this step."""
+    nc = M.cp_link.shape[0]
+    for k in range(nc):
+        link = M.cp_link[k]
+        px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
+        if link >= 0:
+            z = point_world(pose, cs, link, px, pz)[1]
+        else:
+            z = fixed_point_world(fth, fx, fz, px, pz)[1]
+        mark[k] = ground_z - z
+    for r in range(nmax):
+        j, deepest = -1, 0.0
+        for k in range(nc):
+            if deepest < mark[k] < _CHOSEN:
+                j, deepest = k, mark[k]
+        if j < 0:
+            break
+        mark[j] = _CHOSEN
+
+
 @njit(**_INLINE)
 def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     """Penalty ground contact with a stick–slip friction anchor per point.
@@ -298,7 +326,14 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     fth, fx, fz = M.fixed_pose[0], M.fixed_pose[1], M.fixed_pose[2]
     ground, ground_z, k_ground, c_ground = S.ground, S.ground_z, S.k_ground, S.c_ground
     k_tangent, c_tangent, mu = S.k_tangent, S.c_tangent, S.mu
+    nmax = S.max_contacts
+    if nmax > 0 and ground != 0:
+        _deepest(M, pose, cs, fth, fx, fz, ground_z, nmax, cforce)
     for k in range(M.cp_link.shape[0]):
+        if nmax > 0 and cforce[k] != _CHOSEN:
+            cforce[k] = 0.0
+            touching[k] = 0.0
+            continue
         cforce[k] = 0.0
         if ground == 0:
             continue

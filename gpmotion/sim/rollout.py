@@ -206,6 +206,8 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     if len(scene.selfc) and (figure.dimensions != 3 or scene.selfc[:, :2].max() >= len(m.seg_link)):
         raise ValueError(f"scene: self-contact pairs need a 3-D figure and segments of it; "
                          f"{figure.name!r} has {len(m.seg_link)} segments")
+    if scene.max_contacts and figure.dimensions != 2:
+        raise ValueError(f"scene: max_contacts applies to planar figures only; {figure.name!r} is 3-D")
     q0 = _batch_state(q0, E, nq, figure.q_default, "q0")
     qd0 = _batch_state(qd0, E, nv, np.zeros(nv), "qd0")
     F = n_steps // record_every + 1

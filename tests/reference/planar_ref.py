@@ -173,6 +173,19 @@ def rot(th):
     return np.array([[c, -s], [s, c]])
 
 
+def _deepest_points(M, S, pose):
+    """Indices of the points allowed to touch: all, or the ``S.max_contacts``
+    most deeply penetrating ones (ties: the lower index)."""
+    if not S.max_contacts:
+        return set(range(len(M.cp_link)))
+    pens = []
+    for k, (link, p) in enumerate(zip(M.cp_link, M.cp_pos)):
+        th, x, z = pose[link] if link >= 0 else M.fixed_pose
+        pens.append(S.ground_z - (z + (rot(th) @ p)[1]))
+    order = sorted((k for k in range(len(pens)) if pens[k] > 0), key=lambda k: (-pens[k], k))
+    return set(order[:S.max_contacts])
+
+
 def ground_contacts(M, S, q, qd, anchor, touching):
     """Penalty ground contact with a stick–slip friction anchor, the plain way.
 
@@ -182,6 +195,7 @@ def ground_contacts(M, S, q, qd, anchor, touching):
     pose, v = poses_and_velocities(M, q, qd)
     anchor, touching = np.array(anchor, float), np.array(touching, float)
     fext, cforce = np.zeros((len(q), 3)), np.zeros(len(M.cp_link))
+    allowed = _deepest_points(M, S, pose)
     for k, (link, p) in enumerate(zip(M.cp_link, M.cp_pos)):
         if not S.ground:
             continue
@@ -189,7 +203,7 @@ def ground_contacts(M, S, q, qd, anchor, touching):
         R = rot(th)
         x, z = np.array([x, z]) + R @ p
         pen = S.ground_z - z
-        if pen <= 0:
+        if pen <= 0 or k not in allowed:
             touching[k] = 0.0
             continue
         if link >= 0:       # v = (ω, v_origin) in link coordinates; point velocity ω × p
