@@ -218,3 +218,21 @@ def test_study_leaves_numba_threads_alone(tmp_path):
     before = os.environ.get("NUMBA_NUM_THREADS")
     _study().run_one("tiny", 5, 20, str(tmp_path))
     assert os.environ.get("NUMBA_NUM_THREADS") == before
+
+
+def test_every_study_configuration_builds_its_task_and_ground():
+    """Each configuration's task, family options and figure variant are valid;
+    a ``two:`` variant is its figure on a ground where two points touch at most."""
+    import gpmotion
+    from gpmotion.families import make_family
+    study = _study()
+    limited = set()
+    for name, (task_name, fam, params, options, _, _) in study.CONFIGS.items():
+        resolved = study._resolved(params)
+        task = gpmotion.get_task(task_name, **resolved)
+        make_family(fam, task, **options)
+        variant = params.get("figure", ":").split(":")[0]
+        want = study.GROUND_VARIANTS.get(variant, {}).get("max_contacts", 0)
+        assert task.scene().max_contacts == want, name
+        limited |= {name} if want == 2 else set()
+    assert {"star-contact-two", "beryl-periodic-two", "star-sense-contact-two"} <= limited
