@@ -232,7 +232,13 @@ def test_every_study_configuration_builds_its_task_and_ground():
         task = gpmotion.get_task(task_name, **resolved)
         make_family(fam, task, **options)
         variant = params.get("figure", ":").split(":")[0]
-        want = study.GROUND_VARIANTS.get(variant, {}).get("max_contacts", 0)
-        assert task.scene().max_contacts == want, name
-        limited |= {name} if want == 2 else set()
+        ground = study.GROUND_VARIANTS.get(variant, {})
+        scene = task.scene()
+        assert scene.max_contacts == ground.get("max_contacts", 0), name
+        assert scene.c_ground == ground.get("c_ground", 60.0), name
+        limited |= {name} if scene.max_contacts == 2 else set()
     assert {"star-contact-two", "beryl-periodic-two", "star-sense-contact-two"} <= limited
+    # every core configuration has its twin on the damped ground
+    for name in study.CORE:
+        assert study.CONFIGS[f"{name}-damped"][2]["figure"].startswith("damped:")
+        assert study.CONFIGS[f"{name}-damped"][4] == study.CONFIGS[name][4]
