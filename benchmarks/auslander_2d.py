@@ -199,6 +199,11 @@ for _w in (1.0, 2.0):
     CONFIGS[f"star-rotations-w{_w:g}-damped"] = (
         "starman_travel", "bsr-time", {"w_rotations": _w, "figure": "damped:starman"}, {}, ("cartwheel",),
         f"Star-Man time-based + rotations (w {_w:g}), damped ground")
+# a cartwheel repeats: Star-Man's pose cycle at a period t_per < T on the damped ground
+for _t in (1.0, 0.75, 0.5):
+    CONFIGS[f"star-rotations-t{_t:g}-damped"] = (
+        "starman_travel", "bsr-time", {"w_rotations": 0.5, "figure": "damped:starman"}, {"t_per": _t},
+        ("cartwheel",), f"Star-Man time-based, t_per = {_t:g} s, + rotations (w 0.5), damped ground")
 
 
 def _resolved(params: dict) -> dict:
