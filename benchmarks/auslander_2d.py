@@ -180,11 +180,11 @@ GROUND_VARIANTS = {"noslip": {"mu": NOSLIP_MU}, "two": {"max_contacts": 2},
 
 # The paper's collisions are impulses (Baraff's method): a limb that strikes the
 # ground stops.  The figures' own penalty ground (c_ground = 60 N·s/m against
-# k = 5000 N/m) is underdamped, damping ratio 0.2-0.3 under a point carrying
-# 1-2.5 kg of Star-Man (restitution ~0.4-0.5): a struck limb bounces the body
-# off the ground for 2-4 frames, the one short flight that made Star-Man's
-# shuffles "other".  Each core configuration again on a near-critically damped
-# ground (c_ground = DAMPED_C; ζ ≈ 0.9 at 2.5 kg): NAME-damped.
+# k = 5000 N/m) returns a 1 m/s strike of a point carrying 1-2.5 kg at
+# 0.35-0.48 m/s (tests/test_physics.py checks the closed form): a struck limb
+# bounces the body off the ground for 2-4 frames, the one short flight that
+# made Star-Man's shuffles "other".  Each core configuration again on a
+# near-critically damped ground (c_ground = DAMPED_C: 0.08-0.16 m/s): NAME-damped.
 CORE = ("star-sense", "star-sense-contact", "star-time", "star-contact", "star-rotations",
         "star-height", "beryl-tumble", "beryl-periodic")
 FIGURE_OF = {"starman_travel": "starman", "beryl_travel": "beryl"}
