@@ -199,6 +199,16 @@ for _w in (1.0, 2.0):
     CONFIGS[f"star-rotations-w{_w:g}-damped"] = (
         "starman_travel", "bsr-time", {"w_rotations": _w, "figure": "damped:starman"}, {}, ("cartwheel",),
         f"Star-Man time-based + rotations (w {_w:g}), damped ground")
+# the paper's Fig. 10 cartwheel is sense-based (R = 10), and a longer episode gives a roll more time
+CONFIGS["star-sense-rotations"] = ("starman_travel", "bsr-sense", {"w_rotations": 0.5}, {"rules": 10},
+                                   ("cartwheel",), "Star-Man sense-based R=10 + rotations (w 0.5)")
+CONFIGS["star-sense-rotations-damped"] = (
+    "starman_travel", "bsr-sense", {"w_rotations": 0.5, "figure": "damped:starman"}, {"rules": 10},
+    ("cartwheel",), "Star-Man sense-based R=10 + rotations (w 0.5), damped ground")
+for _s in (4.0, 5.0):
+    CONFIGS[f"star-rotations-{_s:g}s-damped"] = (
+        "starman_travel", "bsr-time", {"w_rotations": 0.5, "seconds": _s, "figure": "damped:starman"}, {},
+        ("cartwheel",), f"Star-Man time-based + rotations (w 0.5), T = {_s:g} s, damped ground")
 # a cartwheel repeats: Star-Man's pose cycle at a period t_per < T on the damped ground
 for _t in (1.0, 0.75, 0.5):
     CONFIGS[f"star-rotations-t{_t:g}-damped"] = (
