@@ -232,13 +232,16 @@ def test_every_study_configuration_builds_its_task_and_ground():
         task = gpmotion.get_task(task_name, **resolved)
         make_family(fam, task, **options)
         variant = params.get("figure", ":").split(":")[0]
-        ground = study.GROUND_VARIANTS.get(variant, {})
+        shipped = gpmotion.load_figure(study.FIGURE_OF[task_name]).ground
+        want = gpmotion.make_scene(**{**shipped, **study.GROUND_VARIANTS.get(variant, {})})
         scene = task.scene()
-        assert scene.max_contacts == ground.get("max_contacts", 0), name
-        assert scene.c_ground == ground.get("c_ground", 60.0), name
+        assert scene.max_contacts == want.max_contacts and scene.c_ground == want.c_ground, name
+        assert scene.mu == want.mu, name
         limited |= {name} if scene.max_contacts == 2 else set()
     assert {"star-contact-two", "beryl-periodic-two", "star-sense-contact-two"} <= limited
     # every core configuration has its twin on the damped ground
     for name in study.CORE:
-        assert study.CONFIGS[f"{name}-damped"][2]["figure"].startswith("damped:")
-        assert study.CONFIGS[f"{name}-damped"][4] == study.CONFIGS[name][4]
+        for variant, c in study.DAMPINGS.items():
+            task_name, _, params, _, expected, _ = study.CONFIGS[f"{name}-{variant}"]
+            assert expected == study.CONFIGS[name][4]
+            assert gpmotion.get_task(task_name, **study._resolved(params)).scene().c_ground == c

@@ -289,6 +289,19 @@ _CHOSEN = 1e300
 
 
 @njit(**_INLINE)
+def contact_point_world(M, pose, cs, fth, fx, fz, k):
+    """Contact point ``k``: its link, link-frame position and world (x, z)
+    (``fth, fx, fz``: the model's fixed pose, read by the caller as scalars)."""
+    link = M.cp_link[k]
+    px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
+    if link >= 0:
+        x, z = point_world(pose, cs, link, px, pz)
+    else:
+        x, z = fixed_point_world(fth, fx, fz, px, pz)
+    return link, px, pz, x, z
+
+
+@njit(**_INLINE)
 def _deepest(M, pose, cs, fth, fx, fz, ground_z, nmax, mark):
     """Mark (``_CHOSEN``) the ``nmax`` most deeply penetrating contact points.
 
@@ -296,13 +309,7 @@ def _deepest(M, pose, cs, fth, fx, fz, ground_z, nmax, mark):
     ground simultaneously"; the others pass through it this step."""
     nc = M.cp_link.shape[0]
     for k in range(nc):
-        link = M.cp_link[k]
-        px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
-        if link >= 0:
-            z = point_world(pose, cs, link, px, pz)[1]
-        else:
-            z = fixed_point_world(fth, fx, fz, px, pz)[1]
-        mark[k] = ground_z - z
+        mark[k] = ground_z - contact_point_world(M, pose, cs, fth, fx, fz, k)[4]
     for r in range(nmax):
         j, deepest = -1, 0.0
         for k in range(nc):
@@ -320,6 +327,8 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     Normal: spring-damper on penetration, never pulling.  Tangential: a
     spring to the point where contact began (so a figure at rest does not
     creep), clamped at μ·Fn; when it slips the anchor is dragged along.
+    With ``S.max_contacts`` > 0 only the points ``_deepest`` marks in
+    ``cforce`` touch.
     """
     # numba: a Model field read inside a branch defeats reference-count
     # pruning (~0.1 µs per call); read such fields up front, as scalars
@@ -330,19 +339,14 @@ def ground_contacts(M, S, pose, cs, v, anchor, touching, fext, cforce):
     if nmax > 0 and ground != 0:
         _deepest(M, pose, cs, fth, fx, fz, ground_z, nmax, cforce)
     for k in range(M.cp_link.shape[0]):
-        if nmax > 0 and cforce[k] != _CHOSEN:
-            cforce[k] = 0.0
-            touching[k] = 0.0
-            continue
+        chosen = nmax == 0 or cforce[k] == _CHOSEN    # read before cforce[k] is reset
         cforce[k] = 0.0
         if ground == 0:
             continue
-        link = M.cp_link[k]
-        px, pz = M.cp_pos[k, 0], M.cp_pos[k, 1]
-        if link >= 0:
-            x, z = point_world(pose, cs, link, px, pz)
-        else:
-            x, z = fixed_point_world(fth, fx, fz, px, pz)
+        if not chosen:
+            touching[k] = 0.0
+            continue
+        link, px, pz, x, z = contact_point_world(M, pose, cs, fth, fx, fz, k)
         pen = ground_z - z
         if pen <= 0.0:
             touching[k] = 0.0
