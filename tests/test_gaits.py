@@ -231,8 +231,9 @@ def test_every_study_configuration_builds_its_task_and_ground():
         resolved = study._resolved(params)
         task = gpmotion.get_task(task_name, **resolved)
         make_family(fam, task, **options)
-        variant = params.get("figure", ":").split(":")[0]
-        shipped = gpmotion.load_figure(study.FIGURE_OF[task_name]).ground
+        fig = params.get("figure", ":")
+        variant, base = fig.split(":") if ":" in fig else ("", fig)
+        shipped = gpmotion.load_figure(base or study.FIGURE_OF[task_name]).ground
         want = gpmotion.make_scene(**{**shipped, **study.GROUND_VARIANTS.get(variant, {})})
         scene = task.scene()
         assert scene.max_contacts == want.max_contacts and scene.c_ground == want.c_ground, name
@@ -245,3 +246,27 @@ def test_every_study_configuration_builds_its_task_and_ground():
             task_name, _, params, _, expected, _ = study.CONFIGS[f"{name}-{variant}"]
             assert expected == study.CONFIGS[name][4]
             assert gpmotion.get_task(task_name, **study._resolved(params)).scene().c_ground == c
+    # the headline set is the core set on the reproduction's figures, the default
+    assert study.HEADLINE == [f"{n}-auslander" for n in study.CORE]
+    for name in study.CORE:
+        task_name, fam, params, options, expected, _ = study.CONFIGS[f"{name}-auslander"]
+        core = study.CONFIGS[name]
+        assert (fam, options, expected) == (core[1], core[3], core[4])
+        assert params["figure"] == study.AUSLANDER_FIGURE[task_name]
+        assert gpmotion.get_task(task_name, **params).scene().c_ground == study.DAMPED_C
+        rest = {k: v for k, v in params.items() if k != "figure"}
+        assert rest == (core[2] if name != "star-rotations" else {**core[2], "w_rotations": 4.0})
+
+
+def test_the_reproduction_figures_differ_from_theirs_only_as_documented():
+    """starman_auslander: five equal 0.5 m rods and c_ground 200; beryl_auslander: c_ground 200."""
+    import gpmotion
+    for name, base in (("starman_auslander", "starman"), ("beryl_auslander", "beryl")):
+        fig, ref = gpmotion.load_figure(name), gpmotion.load_figure(base)
+        assert fig.ground == {**ref.ground, "c_ground": 200.0}
+        assert fig.actuator_names == ref.actuator_names and fig.contact_names == ref.contact_names
+        assert fig.total_mass == ref.total_mass
+    star = gpmotion.load_figure("starman_auslander")
+    head = gpmotion.load_figure("starman").contact_names.index("head")
+    assert star.model.cp_pos[head].tolist() == [0.5, 0.0]
+    assert gpmotion.load_figure("starman").model.cp_pos[head].tolist() == [0.3, 0.0]
