@@ -122,11 +122,20 @@ class Progress:
             print(line, file=sys.stderr, flush=True)
 
 
+def _shown(params: dict) -> dict:
+    """Task parameters as the banner shows them: a figure variant (a whole
+    spec) by its name."""
+    fig = params.get("figure")
+    if isinstance(fig, dict):
+        return {**params, "figure": f"{fig.get('name', 'variant')} (variant)"}
+    return params
+
+
 def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDir,
            verb: str) -> str:
     """What the run is: task, family, seed, actuation, and the style-term schedule."""
     head = (f"{verb} {cfg.task} ({cfg.family}, seed {cfg.seed}"
-            f"{', ' + str(cfg.params) if cfg.params else ''}) → {rd.path}")
+            f"{', ' + str(_shown(cfg.params)) if cfg.params else ''}) → {rd.path}")
     own = "" if cfg.actuation else f", {family.name}'s default"
     note = family.banner_note()
     act = (f"  actuation: {actuation}{own}{' · ' + note if note else ''} · "

@@ -40,3 +40,12 @@ def test_banner_names_actuation_and_phase_schedule(tmp_path, capsys):
                  "--generations", "3", "--no-artifacts"]) == 0
     err = capsys.readouterr().err
     assert "actuation: pd ·" in err and "all at full weight" in err
+
+
+def test_banner_names_a_figure_variant_not_its_whole_spec(tmp_path, capsys):
+    assert main(["run", "starman_travel", "--controller", "bsr-time", "--figure", "starman_auslander",
+                 "--out", str(tmp_path / "s"), "--param", "seconds=0.3", "--working", "2",
+                 "--generations", "1", "--no-artifacts"]) == 0
+    head = capsys.readouterr().err.splitlines()[0]
+    assert "'figure': 'starman_auslander (variant)'" in head
+    assert "segment" not in head and len(head) < 200
