@@ -4,6 +4,8 @@
                                       [--seeds 5] [--budget N] [--out DIR]
     python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--t-per S] [--out DIR]
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
+    python benchmarks/creatures_3d.py multistart TASK [--starts 3] [--seeds 5] [--budget N]
+                                      [--t-per S] [--workers 2] [--out DIR]
     python benchmarks/creatures_3d.py mujoco [--quick]
     python benchmarks/creatures_3d.py curves LABEL=RUN_DIR ... [--out PNG]
     python benchmarks/creatures_3d.py steps RUN_DIR ... [--task bob_walk-v3] [--touchdowns]
@@ -31,6 +33,13 @@
   alternating steps (v3's count), touchdowns ahead (v1/v2's count),
   distance, facing, fallen, solved; ``--touchdowns`` lists every touchdown
   (time, foot, how far ahead of the other foot, heading).
+* ``multistart``: §4.2's "multiple runs of the algorithm": per seed S,
+  ``--starts`` K independent time-based BSR searches (seeds S·K … S·K + K − 1,
+  ``--budget`` evaluations each), and the one with the lowest cost is that
+  seed's result (chosen by cost, as a user would, not by the success test).
+  Prints every search and, per seed, whether the chosen one is solved; each
+  search is a line of ``OUT/starts.jsonl`` (with its best controller), and
+  the same command skips searches already there.
 * ``mujoco``: the 3-D kernel against MuJoCo's C rollout on each creature
   (``benchmarks/compare_mujoco.py --only creatures``).
 """
@@ -105,6 +114,75 @@ def search(task, family: str, seed: int, budget: int, stop_on_success=False, **o
              "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
              "describe": task.describe(traj, measures), "options": dict(fam.options)}
     return best, fam, facts
+
+
+def _start(job):
+    """One search of a multistart study (a pool job): its facts and controller."""
+    task_name, params, seed, budget, overrides = job
+    import gpmotion
+    task = gpmotion.get_task(task_name, **params)
+    best, fam, facts = search(task, "bsr-time", seed, budget, **overrides)
+    return {"task": task.id, "params": params, "seed": seed, "budget": budget, **facts,
+            "genome": fam.to_json(best)}
+
+
+def _started(todo, workers: int):
+    """Finished searches: in-process for one worker, else from spawned processes."""
+    import multiprocessing as mp
+    if workers == 1 or len(todo) <= 1:
+        yield from map(_start, todo)
+        return
+    with mp.get_context("spawn").Pool(min(workers, len(todo))) as pool:
+        yield from pool.imap_unordered(_start, todo)
+
+
+def multistart(a) -> int:
+    import os
+    if min(a.starts, a.seeds, a.workers) < 1 or a.budget < 20:
+        print("creatures_3d.py: need --starts, --seeds, --workers >= 1 and --budget >= 20", file=sys.stderr)
+        return 2
+    if "numba" not in sys.modules:       # one numba thread per search (the spawned workers read it)
+        os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    import gpmotion
+    params = dict(kv.split("=", 1) for kv in a.param)
+    try:
+        task = gpmotion.get_task(a.task, **params)
+    except (KeyError, ValueError, TypeError) as e:
+        print(f"creatures_3d.py: {e}", file=sys.stderr)
+        return 2
+    want_t = a.t_per or options(task.name).get("bsr-time", {}).get("t_per")
+    if want_t is None:
+        print(f"creatures_3d.py: {a.task} has no default t_per; give --t-per", file=sys.stderr)
+        return 2
+    overrides = {"t_per": want_t}
+    out = Path(a.out or f"runs/multistart-{a.task}")
+    out.mkdir(parents=True, exist_ok=True)
+    log = out / "starts.jsonl"
+    key = lambda r: (r["seed"], r["budget"], r["options"].get("t_per"))
+    done = {}
+    for line in log.read_text().splitlines() if log.exists() else []:
+        r = json.loads(line)
+        if r["params"] == params and r["task"].split("-v")[0] == a.task.split("-v")[0]:
+            done[key(r)] = r
+    seeds = [s * a.starts + k for s in range(a.first_seed, a.first_seed + a.seeds) for k in range(a.starts)]
+    todo = [(a.task, params, s, a.budget, overrides) for s in seeds if (s, a.budget, want_t) not in done]
+    for r in _started(todo, a.workers):
+        with log.open("a") as f:
+            f.write(json.dumps(r) + "\n")
+        done[key(r)] = r
+        print(f"search seed {r['seed']}: cost {r['cost']:.3f}, {'solved' if r['success'] else 'not solved'}"
+              f" ({r['cpu_s']:.0f} s CPU): {r['describe'][0] if r['describe'] else ''}", flush=True)
+    solved = 0
+    print(f"\n{a.task}, time-based BSR t_per {want_t:g} s, best of {a.starts} searches of {a.budget:,} evaluations\n")
+    print("| seed | searches (cost, solved) | chosen | solved |\n|---|---|---|---|")
+    for s in range(a.first_seed, a.first_seed + a.seeds):
+        runs = [done[(s * a.starts + k, a.budget, want_t)] for k in range(a.starts)]
+        best = min(runs, key=lambda r: r["cost"])
+        solved += best["success"]
+        cells = ", ".join(f"{r['seed']}: {r['cost']:.3f} {'✓' if r['success'] else '✗'}" for r in runs)
+        print(f"| {s} | {cells} | {best['seed']} | {'yes' if best['success'] else 'no'} |")
+    print(f"\nsolved: {solved} / {a.seeds}")
+    return 0
 
 
 def sequence(a) -> int:
@@ -255,6 +333,16 @@ def main(argv=None) -> int:
     v = sub.add_parser("speed")
     v.add_argument("--seed", type=int, default=0)
     v.add_argument("--budget", type=int, default=10000)
+    ms = sub.add_parser("multistart", help="best of K independent time-based searches per seed")
+    ms.add_argument("task")
+    ms.add_argument("--starts", type=int, default=3)
+    ms.add_argument("--seeds", type=int, default=5)
+    ms.add_argument("--first-seed", type=int, default=0)
+    ms.add_argument("--budget", type=int, default=20000, help="evaluations per search")
+    ms.add_argument("--t-per", type=seconds, metavar="SECONDS")
+    ms.add_argument("--param", action="append", default=[], help="task parameter KEY=VALUE")
+    ms.add_argument("--workers", type=int, default=2)
+    ms.add_argument("--out")
     m = sub.add_parser("mujoco")
     m.add_argument("--quick", action="store_true")
     c = sub.add_parser("curves")
@@ -269,7 +357,7 @@ def main(argv=None) -> int:
     from gpmotion.records import ConfigError, FormatError
     try:
         return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
-                "curves": curves, "steps": steps}[a.cmd](a)
+                "curves": curves, "steps": steps, "multistart": multistart}[a.cmd](a)
     except (FormatError, ConfigError) as e:     # a bad run path or file: one line, exit 2
         print(f"creatures_3d.py: {e}", file=sys.stderr)
         return 2

@@ -25,3 +25,28 @@ def test_steps_of_a_file_that_is_not_a_record_is_one_line_and_exit_2(tmp_path, c
     assert _bench().main(["steps", "--task", "bob_walk-v3", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(bad) in err[0]
+
+
+def test_multistart_chooses_each_seeds_best_search_by_cost_and_resumes(tmp_path, capsys):
+    bench, out = _bench(), tmp_path / "ms"
+    argv = ["multistart", "rex_walk", "--starts", "2", "--seeds", "1", "--first-seed", "1",
+            "--budget", "20", "--t-per", "0.4", "--workers", "1", "--out", str(out)]
+    assert bench.main(argv) == 0
+    text = capsys.readouterr().out
+    import json
+    runs = [json.loads(line) for line in (out / "starts.jsonl").read_text().splitlines()]
+    assert sorted(r["seed"] for r in runs) == [2, 3]                 # seed 1 of 2 starts: 2 and 3
+    best = min(runs, key=lambda r: r["cost"])
+    assert f"| 1 | " in text and f"| {best['seed']} | {'yes' if best['success'] else 'no'} |" in text
+    assert all(r["options"]["t_per"] == 0.4 and r["evaluations"] == 20 for r in runs)
+    assert bench.main(argv) == 0                                       # nothing left to run
+    assert "search seed" not in capsys.readouterr().out
+    assert len((out / "starts.jsonl").read_text().splitlines()) == 2
+
+
+def test_multistart_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
+    bench = _bench()
+    assert bench.main(["multistart", "no_such_task", "--out", str(tmp_path)]) == 2
+    assert bench.main(["multistart", "rex_walk", "--starts", "0", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("creatures_3d.py: ") for line in err)
