@@ -6,6 +6,7 @@
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
     python benchmarks/creatures_3d.py multistart TASK [--starts 3] [--seeds 5] [--budget N]
                                       [--t-per S] [--workers 2] [--out DIR]
+    python benchmarks/creatures_3d.py judge WALK TURN WALK2 [--plugins DIR]
     python benchmarks/creatures_3d.py mujoco [--quick]
     python benchmarks/creatures_3d.py curves LABEL=RUN_DIR ... [--out PNG]
     python benchmarks/creatures_3d.py steps RUN_DIR ... [--task bob_walk-v3] [--touchdowns]
@@ -40,6 +41,8 @@
   Prints every search and, per seed, whether the chosen one is solved; each
   search is a line of ``OUT/starts.jsonl`` (with its best controller), and
   the same command skips searches already there.
+* ``judge``: three saved controllers (walk, turn, second walk) run as
+  ``sequence`` runs its own, and the same verdict.
 * ``mujoco``: the 3-D kernel against MuJoCo's C rollout on each creature
   (``benchmarks/compare_mujoco.py --only creatures``).
 """
@@ -185,9 +188,45 @@ def multistart(a) -> int:
     return 0
 
 
+STAGES = ("walk", "turn", "walk2")
+
+
+def judge_sequence(paths) -> dict:
+    """Walk, turn and walk controllers run as one composite (state carried
+    across each switch), each stage judged on its own frames: walk ≥ 1 m,
+    turn ≥ 45°, walk ≥ 1 m, never fallen by Rex's own test (trunk 30°, com
+    75 %), as each stage's search judged it."""
+    from dataclasses import replace
+    from gpmotion.compose import composite
+    from gpmotion.tasks._creature3d import creature_measures
+    from gpmotion.tasks.rex_walk import RexTask
+    comp = composite.from_controllers(list(paths), names=list(STAGES))
+    traj, bounds = composite.run(comp)
+    parts = []
+    for k in range(len(STAGES)):
+        sl = slice(int(bounds[0, k]), int(bounds[0, k + 1]) + 1)
+        piece = traj.episode(0)
+        piece = replace(piece, q=piece.q[:, sl], qd=piece.qd[:, sl], com=piece.com[:, sl],
+                        contact_force=piece.contact_force[:, sl], times=piece.times[sl])
+        parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
+                                       min_height=RexTask.min_height))
+    done = (parts[0]["distance"][0] >= 1.0 and parts[1]["turn"][0] >= np.radians(45)
+            and parts[2]["distance"][0] >= 1.0 and not any(p["fall"][0] > 0 for p in parts))
+    return {"walk_m": float(parts[0]["distance"][0]), "turn_deg": float(np.degrees(parts[1]["turn"][0])),
+            "walk2_m": float(parts[2]["distance"][0]),
+            "fell": [bool(p["fall"][0] > 0) for p in parts], "completes": bool(done)}
+
+
+def judge(a) -> int:
+    import gpmotion
+    for folder in a.plugins:
+        gpmotion.load_plugins(folder)
+    print(json.dumps(judge_sequence([Path(p) for p in a.controllers])))
+    return 0
+
+
 def sequence(a) -> int:
     import gpmotion
-    from gpmotion.compose import composite
     from gpmotion.controller_file import save_controller
     out = Path(a.out or "runs/creatures-sequence")
     out.mkdir(parents=True, exist_ok=True)
@@ -203,27 +242,7 @@ def sequence(a) -> int:
         report[name] = facts
         print(f"{name} (t_per {fam.options['t_per']} s): {facts['describe'][0]}  "
               f"({facts['evaluations']} evaluations, {facts['wall_s']:.0f} s)", flush=True)
-    comp = composite.from_controllers([paths[n] for n, _, _ in stages], names=[n for n, _, _ in stages])
-    traj, bounds = composite.run(comp)
-    from gpmotion.tasks._creature3d import creature_measures
-    from gpmotion.tasks.rex_walk import RexTask
-    parts = []
-    for k, (name, _, _) in enumerate(stages):
-        lo, hi = int(bounds[0, k]), int(bounds[0, k + 1])
-        piece = traj.episode(0)
-        from dataclasses import replace
-        sl = slice(lo, hi + 1)
-        piece = replace(piece, q=piece.q[:, sl], qd=piece.qd[:, sl], com=piece.com[:, sl],
-                        contact_force=piece.contact_force[:, sl], times=piece.times[sl])
-        # "never fallen" by Rex's own test (trunk 30°, com 75 %), as each stage's search judged it
-        parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
-                                       min_height=RexTask.min_height))
-    done = (parts[0]["distance"][0] >= 1.0 and parts[1]["turn"][0] >= np.radians(45)
-            and parts[2]["distance"][0] >= 1.0 and not any(p["fall"][0] > 0 for p in parts))
-    report["composite"] = {"walk_m": float(parts[0]["distance"][0]),
-                           "turn_deg": float(np.degrees(parts[1]["turn"][0])),
-                           "walk2_m": float(parts[2]["distance"][0]),
-                           "fell": [bool(p["fall"][0] > 0) for p in parts], "completes": bool(done),
+    report["composite"] = {**judge_sequence([paths[n] for n, _, _ in stages]),
                            "t_per": [report[n]["options"]["t_per"] for n, _, _ in stages]}
     print(json.dumps(report["composite"]))
     (out / "sequence.json").write_text(json.dumps(report, indent=2, default=str))
@@ -343,6 +362,10 @@ def main(argv=None) -> int:
     ms.add_argument("--param", action="append", default=[], help="task parameter KEY=VALUE")
     ms.add_argument("--workers", type=int, default=2)
     ms.add_argument("--out")
+    j = sub.add_parser("judge", help="run walk, turn, walk controllers as one composite and judge it")
+    j.add_argument("controllers", nargs=3, metavar="FILE", help="walk, turn and second walk (best.json)")
+    j.add_argument("--plugins", action="append", default=[], metavar="DIR",
+                   help="a plugin folder a controller's task needs")
     m = sub.add_parser("mujoco")
     m.add_argument("--quick", action="store_true")
     c = sub.add_parser("curves")
@@ -357,7 +380,8 @@ def main(argv=None) -> int:
     from gpmotion.records import ConfigError, FormatError
     try:
         return {"rates": rates, "sequence": sequence, "speed": speed, "mujoco": mujoco,
-                "curves": curves, "steps": steps, "multistart": multistart}[a.cmd](a)
+                "curves": curves, "steps": steps, "multistart": multistart,
+                "judge": judge}[a.cmd](a)
     except (FormatError, ConfigError) as e:     # a bad run path or file: one line, exit 2
         print(f"creatures_3d.py: {e}", file=sys.stderr)
         return 2

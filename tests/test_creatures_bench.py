@@ -50,3 +50,20 @@ def test_multistart_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert bench.main(["multistart", "rex_walk", "--starts", "0", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and all(line.startswith("creatures_3d.py: ") for line in err)
+
+
+def test_judge_gives_the_recorded_sequence_its_verdict(capsys):
+    """Session 10's completed walk → turn → walk, judged from its saved controllers."""
+    import json
+    d = ROOT / "docs" / "notes" / "rex_sequence"
+    assert _bench().main(["judge", str(d / "walk.json"), str(d / "turn.json"), str(d / "walk2.json")]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["completes"] and got["fell"] == [False, False, False]
+    assert round(got["walk_m"], 2) == 2.05 and round(got["turn_deg"]) == 311 and round(got["walk2_m"], 2) == 1.05
+
+
+def test_judge_of_a_missing_controller_is_one_line_and_exit_2(tmp_path, capsys):
+    d = ROOT / "docs" / "notes" / "rex_sequence"
+    assert _bench().main(["judge", str(d / "walk.json"), str(tmp_path / "no.json"), str(d / "walk2.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no.json" in err[0]
