@@ -293,6 +293,17 @@ def _write_config(rd: RunDir, cfg, task, family, actuation) -> dict:
     return rd.read_config()           # digest what is on disk
 
 
+def _check_tables(doc: dict, path) -> None:
+    """config.json's recorded task and family settings are tables (or absent):
+    a resume merges them, and a list or a number there must be a clear error."""
+    for key in ("task_config", "family_config"):
+        if doc.get(key) is not None and not isinstance(doc[key], dict):
+            raise ConfigError(f"{path}: '{key}' must be a table, got {type(doc[key]).__name__}")
+    params = (doc.get("task_config") or {}).get("params")
+    if params is not None and not isinstance(params, dict):
+        raise ConfigError(f"{path}: 'task_config.params' must be a table, got {type(params).__name__}")
+
+
 def _open_resume(out):
     """Lock the run and read its config (checked field by field)."""
     path = Path(out)
@@ -306,6 +317,7 @@ def _open_resume(out):
     rd = RunDir.create(out, resume=True)
     try:
         doc = rd.read_config()
+        _check_tables(doc, rd.path / RunDir.CONFIG)
         cfg = RunConfig.from_json(doc.get("run"), f"{rd.path / RunDir.CONFIG}")
     except BaseException:
         rd.close()

@@ -194,3 +194,19 @@ def test_whole_config_and_checkpoint_resume_or_are_one_line_and_run_no_code(real
 
     check()
     assert read_json(out / "best.json", kind="best")        # the source run is untouched
+
+
+@pytest.mark.parametrize("key, value", [("family_config", [None]), ("family_config", 3),
+                                        ("task_config", "x"), ("task_config", {"params": [1]})])
+def test_a_config_whose_recorded_settings_are_not_tables_is_one_line_on_resume(real_run, tmp_path, key, value):
+    """Found by the fuzz test above (hypothesis seed 13): family_config = [None] was a TypeError."""
+    from gpmotion.run import run
+    out, _, _, docs = real_run
+    doc = json.loads(json.dumps(docs["config"]))
+    inner = doc["data"] if "data" in doc else doc
+    inner[key] = value
+    d = _write(out, tmp_path / "copy", "config", doc)
+    with pytest.raises(ValueError) as e:
+        run(None, d, resume=True, quiet=True, artifacts=False, max_generations=0)
+    _one_line(e.value)
+    assert key in str(e.value)
