@@ -224,7 +224,7 @@ for _name in CORE:
     _task, _fam, _params, _options, _gaits, _label = CONFIGS[_name]
     _params = {**_params, "figure": AUSLANDER_FIGURE[_task]}
     if _name == "star-rotations":
-        _params["w_rotations"], _label = 4.0, _label.replace("(w 0.5)", "(w 4)")
+        _params["w_rotations"], _label = 4.0, "Star-Man time-based + rotations (w 4)"
     CONFIGS[f"{_name}-auslander"] = (_task, _fam, _params, _options, _gaits,
                                      f"{_label}, {AUSLANDER_FIGURE[_task]}")
 HEADLINE = [f"{n}-auslander" for n in CORE]

@@ -175,6 +175,12 @@ def multistart(a) -> int:
         done[key(r)] = r
         print(f"search seed {r['seed']}: cost {r['cost']:.3f}, {'solved' if r['success'] else 'not solved'}"
               f" ({r['cpu_s']:.0f} s CPU): {r['describe'][0] if r['describe'] else ''}", flush=True)
+    _multistart_table(a, done, want_t)
+    return 0
+
+
+def _multistart_table(a, done: dict, want_t: float) -> None:
+    """Per seed, its searches and the one chosen by cost; the solved count."""
     solved = 0
     print(f"\n{a.task}, time-based BSR t_per {want_t:g} s, best of {a.starts} searches of {a.budget:,} evaluations\n")
     print("| seed | searches (cost, solved) | chosen | solved |\n|---|---|---|---|")
@@ -185,7 +191,6 @@ def multistart(a) -> int:
         cells = ", ".join(f"{r['seed']}: {r['cost']:.3f} {'✓' if r['success'] else '✗'}" for r in runs)
         print(f"| {s} | {cells} | {best['seed']} | {'yes' if best['success'] else 'no'} |")
     print(f"\nsolved: {solved} / {a.seeds}")
-    return 0
 
 
 STAGES = ("walk", "turn", "walk2")
@@ -202,12 +207,11 @@ def judge_sequence(paths) -> dict:
     from gpmotion.tasks.rex_walk import RexTask
     comp = composite.from_controllers(list(paths), names=list(STAGES))
     traj, bounds = composite.run(comp)
-    parts = []
+    parts, whole = [], traj.episode(0)
     for k in range(len(STAGES)):
         sl = slice(int(bounds[0, k]), int(bounds[0, k + 1]) + 1)
-        piece = traj.episode(0)
-        piece = replace(piece, q=piece.q[:, sl], qd=piece.qd[:, sl], com=piece.com[:, sl],
-                        contact_force=piece.contact_force[:, sl], times=piece.times[sl])
+        piece = replace(whole, q=whole.q[:, sl], qd=whole.qd[:, sl], com=whole.com[:, sl],
+                        contact_force=whole.contact_force[:, sl], times=whole.times[sl])
         parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
                                        min_height=RexTask.min_height))
     done = (parts[0]["distance"][0] >= 1.0 and parts[1]["turn"][0] >= np.radians(45)
