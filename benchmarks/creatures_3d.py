@@ -2,7 +2,8 @@
 
     python benchmarks/creatures_3d.py rates TASK [--families bsr-time,bsr-sense,gp]
                                       [--seeds 5] [--budget N] [--out DIR]
-    python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--t-per S] [--out DIR]
+    python benchmarks/creatures_3d.py sequence [--seed 0] [--budget N] [--budget-walk2 N]
+                                      [--t-per S[,S,S]] [--starts K] [--workers W] [--out DIR]
     python benchmarks/creatures_3d.py speed [--seed 0] [--budget N]
     python benchmarks/creatures_3d.py multistart TASK [--starts 3] [--seeds 5] [--budget N]
                                       [--t-per S] [--workers 2] [--out DIR]
@@ -24,8 +25,12 @@
   three controllers run as one composite (gpmotion.compose, state carried
   across each switch); prints each stage's numbers and whether the whole
   sequence completes (walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m, never fallen).
-  ``--t-per`` sets the time-based BSR period of all three stages (default
-  FAMILY_OPTIONS'); each stage's family options are in sequence.json.
+  ``--t-per`` sets the time-based BSR period of all three stages, or of each
+  (``0.4,0.5,0.4``; default FAMILY_OPTIONS'); ``--starts K`` makes the walk
+  the cheapest of K searches (as ``multistart``); ``--budget-walk2`` gives
+  the second walk its own budget.  Each stage's task, search seed(s) and
+  family options are in sequence.json.  Session 24's pipeline (2/5 seeds
+  complete): ``--starts 3 --budget 20000 --budget-walk2 60000 --t-per 0.4,0.5,0.4``.
 * ``speed``: one time-based Rex walk search until its first acceptable
   controller (``rex_walk`` solved: its success threshold); wall and CPU
   seconds and evaluations.
@@ -79,6 +84,14 @@ def seconds(text: str) -> float:
     return v
 
 
+def t_per_list(text: str) -> list[float]:
+    """One t_per for the three stages, or three (walk, turn, walk2) (argparse type)."""
+    vals = [seconds(x) for x in text.split(",")]
+    if len(vals) not in (1, 3):
+        raise argparse.ArgumentTypeError(f"give one t_per or three (walk,turn,walk2), got {text}")
+    return vals * 3 if len(vals) == 1 else vals
+
+
 def rates(a) -> int:
     from gpmotion.compare import compare
     fams = a.families.split(",")
@@ -113,7 +126,7 @@ def search(task, family: str, seed: int, budget: int, stop_on_success=False, **o
     else:
         best = s.best
     traj, costs, measures, ok = replay_genome(task, fam, ACTUATION, best)
-    facts = {"evaluations": evals, "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
+    facts = {"seed": seed, "evaluations": evals, "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
              "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
              "describe": task.describe(traj, measures), "options": dict(fam.options)}
     return best, fam, facts
@@ -229,23 +242,46 @@ def judge(a) -> int:
     return 0
 
 
+def _stage(task, seed: int, budget: int, t_per, starts: int = 1, workers: int = 1):
+    """A stage's controller: one search of seed ``seed``, or with ``starts`` K > 1
+    the cheapest of K (seeds seed·K … seed·K + K − 1, as ``multistart``)."""
+    overrides = {} if t_per is None else {"t_per": t_per}
+    if starts == 1:
+        return search(task, "bsr-time", seed, budget, **overrides)
+    from gpmotion.families import make_family
+    jobs = [(task.id, dict(task.params), seed * starts + k, budget, overrides)
+            for k in range(starts)]
+    runs = sorted(_started(jobs, workers), key=lambda r: r["seed"])
+    best = min(runs, key=lambda r: r["cost"])
+    fam = make_family("bsr-time", task, **best["options"])
+    facts = {k: v for k, v in best.items() if k not in ("genome", "task", "params", "budget")}
+    facts["starts"] = [{"seed": r["seed"], "cost": r["cost"], "success": r["success"]} for r in runs]
+    return fam.from_json(best["genome"]), fam, facts
+
+
 def sequence(a) -> int:
     import gpmotion
     from gpmotion.controller_file import save_controller
+    if min(a.starts, a.workers) < 1 or min(a.budget, a.budget_walk2 or a.budget) < 20:
+        print("creatures_3d.py: need --starts, --workers >= 1 and budgets >= 20", file=sys.stderr)
+        return 2
+    t_pers = a.t_per or [None] * 3
+    budgets = (a.budget, a.budget, a.budget_walk2 or a.budget)
     out = Path(a.out or "runs/creatures-sequence")
     out.mkdir(parents=True, exist_ok=True)
     stages = [("walk", "rex_walk", ""), ("turn", "rex_turn", "walk"), ("walk2", "rex_walk", "walk,turn")]
     paths, report = {}, {}
-    for name, task_name, after in stages:
+    for k, (name, task_name, after) in enumerate(stages):
         prior = ",".join(str(paths[p]) for p in after.split(",") if p)
         task = gpmotion.get_task(task_name, after=prior)
-        best, fam, facts = search(task, "bsr-time", a.seed, a.budget,
-                                  **({} if a.t_per is None else {"t_per": a.t_per}))
+        best, fam, facts = _stage(task, a.seed, budgets[k], t_pers[k],
+                                  starts=a.starts if k == 0 else 1, workers=a.workers)
         paths[name] = out / f"{name}.json"
-        save_controller(paths[name], task, best, family=fam, actuation=ACTUATION, seed=a.seed)
-        report[name] = facts
-        print(f"{name} (t_per {fam.options['t_per']} s): {facts['describe'][0]}  "
-              f"({facts['evaluations']} evaluations, {facts['wall_s']:.0f} s)", flush=True)
+        save_controller(paths[name], task, best, family=fam, actuation=ACTUATION, seed=facts["seed"])
+        report[name] = {"task": task.id, **facts}
+        print(f"{name} ({task.id}, t_per {fam.options['t_per']} s, search seed {facts['seed']}): "
+              f"{facts['describe'][0]}  ({facts['evaluations']} evaluations, {facts['cpu_s']:.0f} s CPU)",
+              flush=True)
     report["composite"] = {**judge_sequence([paths[n] for n, _, _ in stages]),
                            "t_per": [report[n]["options"]["t_per"] for n, _, _ in stages]}
     print(json.dumps(report["composite"]))
@@ -349,9 +385,14 @@ def main(argv=None) -> int:
     r.add_argument("--quiet", action="store_true")
     s = sub.add_parser("sequence")
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--budget", type=int, default=3000)
-    s.add_argument("--t-per", type=seconds, metavar="SECONDS",
-                   help="time-based BSR t_per of all three stages (default: FAMILY_OPTIONS')")
+    s.add_argument("--budget", type=int, default=3000, help="evaluations of the walk and the turn (each search)")
+    s.add_argument("--budget-walk2", type=int, metavar="N", help="evaluations of the second walk (default --budget)")
+    s.add_argument("--t-per", type=t_per_list, metavar="S[,S,S]",
+                   help="time-based BSR t_per of all three stages, or of walk, turn, walk2 "
+                        "(default: FAMILY_OPTIONS')")
+    s.add_argument("--starts", type=int, default=1,
+                   help="the walk: the cheapest of K searches (seeds seed·K … seed·K + K − 1)")
+    s.add_argument("--workers", type=int, default=1, help="processes for the walk's K searches")
     s.add_argument("--out")
     v = sub.add_parser("speed")
     v.add_argument("--seed", type=int, default=0)

@@ -351,8 +351,10 @@ def test_creature_reports_read_their_facts_in_order():
     fallen = "fallen 25% of the time"
     assert gpmotion.get_task("rex_walk").describe(None, m) == [
         f"forward 1.23 m, sideways 0.05 m, heading change 90°, 3 forward steps, {fallen}"]
-    assert gpmotion.get_task("rex_turn").describe(None, m) == [
+    assert gpmotion.get_task("rex_turn-v2").describe(None, m) == [
         f"heading change 90°, forward 1.23 m, {fallen}"]
+    assert gpmotion.get_task("rex_turn").describe(None, {**m, "spin": np.array([np.radians(12)])}) == [
+        f"heading change 90°, spinning 12°/s at the handover, forward 1.23 m, {fallen}"]
     assert gpmotion.get_task("bob_walk-v1").describe(None, m) == [
         f"3 forward steps, forward 1.23 m, sideways 0.05 m, rotation 45°, {fallen}"]
     assert gpmotion.get_task("bob_walk-v2").describe(None, m) == [
@@ -360,6 +362,33 @@ def test_creature_reports_read_their_facts_in_order():
     assert gpmotion.get_task("bob_walk").describe(None, {**m, "touchdowns": np.array([4.0])}) == [
         f"3 forward steps, 4 touchdowns ahead, forward 1.23 m, sideways 0.05 m, "
         f"facing 30° away on average, {fallen}"]
+
+
+def _settled_turn(**params):
+    """Session 24's settled turn (seed 0, from its walk), replayed under rex_turn-v3."""
+    from gpmotion.replay import load_controller, replay_genome
+    d = Path(__file__).parent / "data" / "rex_turn_v3"
+    _, fam, act, genome, rec = load_controller(d / "turn.json")
+    task = gpmotion.get_task("rex_turn-v3", after=str(d / "walk.json"), **params)
+    _, costs, m, ok = replay_genome(task, make_family(fam.name, task, **fam.options), act, genome)
+    return rec, costs, m, ok
+
+
+def test_rex_turn_v3_scores_the_settled_turn_it_was_searched_under():
+    """rex_turn-v3 is session 23's plugin rex_turn_settled shipped: the turn its
+    search found (90°, 4°/s at the handover) scores its recorded cost bit for bit."""
+    rec, costs, m, ok = _settled_turn()
+    assert costs[0] == rec["cost"] and ok[0]
+    assert round(np.degrees(m["turn"][0])) == 90 and m["overshoot"][0] == 0.0
+    assert round(np.degrees(m["spin"][0])) == 4
+
+
+def test_rex_turn_v3_pays_up_to_the_target_and_charges_what_is_past_it():
+    _, costs, m, _ = _settled_turn(target_degrees=45.0, w_spin=0.0)
+    assert m["turn_credit"][0] == pytest.approx(np.radians(45))
+    assert m["overshoot"][0] == pytest.approx(m["turn"][0] - np.radians(45))
+    with pytest.raises(ValueError, match="w_spin"):
+        gpmotion.get_task("rex_turn", w_spin=-1.0)
 
 
 def test_a_walk_that_topples_after_its_last_frame_fails_rex_walk_v2():

@@ -67,3 +67,29 @@ def test_judge_of_a_missing_controller_is_one_line_and_exit_2(tmp_path, capsys):
     assert _bench().main(["judge", str(d / "walk.json"), str(tmp_path / "no.json"), str(d / "walk2.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no.json" in err[0]
+
+
+def test_sequence_runs_the_three_stages_with_their_own_settings(tmp_path, capsys):
+    """The walk is the cheapest of --starts searches, each stage gets its own
+    t_per and the second walk its own budget; the turn is rex_turn-v3."""
+    import json
+    out = tmp_path / "seq"
+    argv = ["sequence", "--seed", "1", "--starts", "2", "--budget", "20", "--budget-walk2", "30",
+            "--t-per", "0.4,0.5,0.3", "--out", str(out)]
+    assert _bench().main(argv) == 0
+    rep = json.loads((out / "sequence.json").read_text())
+    walk = rep["walk"]
+    assert [s["seed"] for s in walk["starts"]] == [2, 3]
+    assert walk["cost"] == min(s["cost"] for s in walk["starts"]) and walk["seed"] in (2, 3)
+    assert [rep[k]["task"] for k in ("walk", "turn", "walk2")] == ["rex_walk-v2", "rex_turn-v3", "rex_walk-v2"]
+    assert [rep[k]["evaluations"] for k in ("walk", "turn", "walk2")] == [20, 20, 30]
+    assert rep["composite"]["t_per"] == [0.4, 0.5, 0.3] and rep["turn"]["seed"] == 1
+    assert json.loads((out / "walk.json").read_text())["seed"] == walk["seed"]
+
+
+def test_sequence_bad_t_per_is_one_line_and_exit_2(tmp_path, capsys):
+    import pytest
+    with pytest.raises(SystemExit) as e:
+        _bench().main(["sequence", "--t-per", "0.4,0.5", "--out", str(tmp_path)])
+    assert e.value.code == 2
+    assert "three" in capsys.readouterr().err
