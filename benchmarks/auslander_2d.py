@@ -52,7 +52,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import multiprocessing as mp
 import os
 import sys
 import time
@@ -62,6 +61,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _pool import finished  # noqa: E402
 
 
 def _beryl_periodic(t_per=0.5, bsr_dt=0.1, term="contact_distance", weight=2.0):
@@ -419,7 +420,7 @@ def main(argv=None):
     todo = [] if args.table_only else [(n, s, args.budget, str(out)) for s in seeds for n in names
                                        if (n, s, args.budget) not in results]
     try:
-        for rec in _runs(todo, args.workers):
+        for rec in finished(_job, todo, args.workers):
             results[(rec["config"], rec["seed"], rec["budget"])] = rec
             print(f"{rec['config']} seed {rec['seed']}: {rec['gait']} {rec['distance']:.2f} m "
                   f"({rec['wall_s']:.0f} s)", flush=True)
@@ -437,18 +438,6 @@ def main(argv=None):
     if args.docs:
         for p in filmstrips(chosen, Path(args.docs)):
             print("wrote", p)
-
-
-def _runs(todo, workers: int):
-    """Finished records, in-process for one worker (Ctrl-C / SIGTERM then
-    checkpoints the run), else from a pool of spawned processes."""
-    if workers == 1 or len(todo) <= 1:
-        for job in todo:
-            yield run_one(*job)
-        return
-    if todo:
-        with mp.get_context("spawn").Pool(min(workers, len(todo))) as pool:
-            yield from pool.imap_unordered(_job, todo)
 
 
 if __name__ == "__main__":

@@ -61,6 +61,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _pool import finished  # noqa: E402
+
 ACTUATION = "kinematic"
 FAMILY_OPTIONS = {
     "cujo_travel": {"bsr-time": {"rules": 4, "segments": "variable", "t_per": 0.6}},
@@ -142,16 +145,6 @@ def _start(job):
             "genome": fam.to_json(best)}
 
 
-def _started(todo, workers: int):
-    """Finished searches: in-process for one worker, else from spawned processes."""
-    import multiprocessing as mp
-    if workers == 1 or len(todo) <= 1:
-        yield from map(_start, todo)
-        return
-    with mp.get_context("spawn").Pool(min(workers, len(todo))) as pool:
-        yield from pool.imap_unordered(_start, todo)
-
-
 def multistart(a) -> int:
     import os
     if min(a.starts, a.seeds, a.workers) < 1 or a.budget < 20:
@@ -182,7 +175,7 @@ def multistart(a) -> int:
             done[key(r)] = r
     seeds = [s * a.starts + k for s in range(a.first_seed, a.first_seed + a.seeds) for k in range(a.starts)]
     todo = [(a.task, params, s, a.budget, overrides) for s in seeds if (s, a.budget, want_t) not in done]
-    for r in _started(todo, a.workers):
+    for r in finished(_start, todo, a.workers):
         with log.open("a") as f:
             f.write(json.dumps(r) + "\n")
         done[key(r)] = r
@@ -251,7 +244,7 @@ def _stage(task, seed: int, budget: int, t_per, starts: int = 1, workers: int = 
     from gpmotion.families import make_family
     jobs = [(task.id, dict(task.params), seed * starts + k, budget, overrides)
             for k in range(starts)]
-    runs = sorted(_started(jobs, workers), key=lambda r: r["seed"])
+    runs = sorted(finished(_start, jobs, workers), key=lambda r: r["seed"])
     best = min(runs, key=lambda r: r["cost"])
     fam = make_family("bsr-time", task, **best["options"])
     facts = {k: v for k, v in best.items() if k not in ("genome", "task", "params", "budget")}
@@ -305,7 +298,6 @@ def speed(a) -> int:
 
 
 def mujoco(a) -> int:
-    sys.path.insert(0, str(Path(__file__).parent))
     import compare_mujoco
     return compare_mujoco.main(["--only", "creatures"] + (["--quick"] if a.quick else []))
 
