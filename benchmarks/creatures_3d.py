@@ -35,7 +35,8 @@
   controller (``rex_walk`` solved: its success threshold); wall and CPU
   seconds and evaluations.
 * ``steps``: Bob's saved controllers replayed under one ``bob_walk``
-  version (default the newest): per run, the evaluations the search spent,
+  version (default the newest), each on the figure (variant) it was searched
+  on: per run, the evaluations the search spent,
   alternating steps (v3's count), touchdowns ahead (v1/v2's count),
   distance, facing, fallen, solved; ``--touchdowns`` lists every touchdown
   (time, foot, how far ahead of the other foot, heading).
@@ -334,11 +335,12 @@ def steps(a) -> int:
     from gpmotion.families import make_family
     from gpmotion.replay import load_controller, replay_genome
     from gpmotion.tasks._creature3d import foot_tracks
-    task = gpmotion.get_task(a.task)
     print("| run | recorded task | evaluations | steps | touchdowns ahead | forward m | facing ° | "
           "fallen % | solved |\n|---|---|---|---|---|---|---|---|---|")
     for run in a.runs:
         rec_task, fam, act, genome, _ = load_controller(run)
+        variant = rec_task.params.get("figure")          # replayed on the figure it was searched on
+        task = gpmotion.get_task(a.task, **({"figure": variant} if variant else {}))
         traj, _, m, ok = replay_genome(task, make_family(fam.name, task, **fam.options), act, genome)
         evals = ""
         log = Path(run) / "log.csv"

@@ -93,3 +93,22 @@ def test_sequence_bad_t_per_is_one_line_and_exit_2(tmp_path, capsys):
         _bench().main(["sequence", "--t-per", "0.4,0.5", "--out", str(tmp_path)])
     assert e.value.code == 2
     assert "three" in capsys.readouterr().err
+
+
+def test_steps_replays_a_controller_on_the_figure_variant_it_was_searched_on(tmp_path, capsys):
+    """A Bob whose waist also twists has 11 driven joints: replayed on the plain
+    Bob (as before) its controller was a traceback, now it is its own row."""
+    import numpy as np
+
+    import gpmotion
+    from gpmotion.controller_file import save_controller
+    from gpmotion.families import make_family
+    spec = tmp_path / "bob_twist.toml"
+    spec.write_text('extends = "bob"\nname = "bob_twist"\n[[joints]]\nname = "waist"\naxes = "zyx"\n'
+                    'limits = [[-0.35, 0.35], [-0.17, 0.17], [-0.1, 0.1]]\n')
+    task = gpmotion.get_task("bob_walk-v3", figure=str(spec), seconds=0.5)
+    fam = make_family("bsr-time", task, segments="variable", t_per=0.5)
+    assert len(task.controlled_actuators()) == 11
+    save_controller(tmp_path / "best.json", task, fam.random(np.random.default_rng(0)), family=fam)
+    assert _bench().main(["steps", "--task", "bob_walk-v3", str(tmp_path / "best.json")]) == 0
+    assert "| bob_walk-v3 |" in capsys.readouterr().out
