@@ -255,7 +255,11 @@ def test_every_study_configuration_builds_its_task_and_ground():
         assert params["figure"] == study.AUSLANDER_FIGURE[task_name]
         assert gpmotion.get_task(task_name, **params).scene().c_ground == study.DAMPED_C
         rest = {k: v for k, v in params.items() if k != "figure"}
-        assert rest == (core[2] if name != "star-rotations" else {**core[2], "w_rotations": 4.0})
+        key, weight, label = study.AUSLANDER_WEIGHTS.get(name, (None, None, core[5]))
+        assert rest == ({**core[2], key: weight} if key else core[2])
+        assert study.CONFIGS[f"{name}-auslander"][5].startswith(label)
+    assert study.CONFIGS["star-height-auslander"][2]["w_max_height"] == 0.5
+    assert study.CONFIGS["star-rotations-auslander"][2]["w_rotations"] == 4.0
 
 
 def test_the_reproduction_figures_differ_from_theirs_only_as_documented():
