@@ -16,7 +16,12 @@ smaller budget finished, and names the budgets it counted.
 
     python benchmarks/auslander_2d.py [--seeds 5] [--budget 40000]
         [--configs star-contact,beryl-tumble] [--workers 2] [--out DIR] [--docs DIR]
-        [--table-only]
+        [--table-only] [--study FILE.json [--plugins DIR]]
+
+``--study FILE.json`` adds configurations of one's own (a JSON object
+{NAME: [task, family, params, options, expected gaits, label]}, parsed and
+checked, e.g. a figure variant as ``params.figure``: docs/notes/auslander_arms/);
+``--plugins DIR`` loads a plugin folder a study's task needs.
 
 Configurations (``CONFIGS``; the paper's expected gait in brackets):
   star-sense      Star-Man, sense-based, R = 10, unguided   [shuffle, Figs. 9-10]
@@ -171,6 +176,40 @@ def _fail(msg: str) -> None:
     sys.exit(2)
 
 
+def read_study(path: str) -> dict:
+    """Configurations of one's own from a JSON file, parsed and checked (never
+    run as code): {NAME: [task, family, task params, family options, expected
+    gaits, label]}, each as a CONFIGS entry; a name may not be a built-in one.
+    A task from a plugin needs ``--plugins`` (loaded before this is read)."""
+    from gpmotion import gaits
+    from gpmotion.families import family_names
+    from gpmotion.task import task_ids, task_names
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{path}: cannot read a study ({e})") from None
+    if not isinstance(data, dict) or not data:
+        raise ValueError(f"{path}: a study is a JSON object {{NAME: [task, family, params, options, gaits, label]}}")
+    out = {}
+    for name, entry in data.items():
+        where = f"{path}: {name!r}"
+        if name in CONFIGS:
+            raise ValueError(f"{where}: a built-in configuration's name; choose another")
+        if not (isinstance(entry, list) and len(entry) == 6):
+            raise ValueError(f"{where}: must be [task, family, params, options, gaits, label]")
+        task, family, params, options, expected, label = entry
+        if not isinstance(task, str) or task not in task_names() + task_ids():
+            raise ValueError(f"{where}: unknown task {task!r} (a plugin's needs --plugins)")
+        if family not in family_names() or not family.startswith("bsr"):
+            raise ValueError(f"{where}: family must be a BSR family (bsr-time, bsr-sense), got {family!r}")
+        if not (isinstance(params, dict) and isinstance(options, dict) and isinstance(label, str)):
+            raise ValueError(f"{where}: params and options must be objects, label a string")
+        if not (isinstance(expected, list) and all(g in gaits.GAITS for g in expected)):
+            raise ValueError(f"{where}: gaits must be a list of {', '.join(gaits.GAITS)}")
+        out[name] = (task, family, params, options, tuple(expected), label)
+    return out
+
+
 NOSLIP_MU = 5.0
 # figure = "VARIANT:NAME": figure NAME on another ground
 DAMPED_C = 200.0
@@ -258,8 +297,10 @@ def _variant(params: dict) -> dict:
     return {"figure": params["figure"]} if "figure" in params else {}
 
 
-def run_one(name: str, seed: int, budget: int, out: str) -> dict:
-    """One serial search of configuration ``name``; its best motion classified.
+def run_one(name: str, seed: int, budget: int, out: str, config=None, plugins=()) -> dict:
+    """One serial search of configuration ``name`` (``config``: its CONFIGS
+    entry, passed along so a spawned worker needs no study file; ``plugins``:
+    folders to load first); its best motion classified.
 
     The search runs through the run loop (``gpmotion.run``) in its own run
     folder ``OUT/runs/NAME-seedS-BUDGET``, which checkpoints every 10 s: a
@@ -271,7 +312,10 @@ def run_one(name: str, seed: int, budget: int, out: str) -> dict:
     from gpmotion.run import run
     from gpmotion.runconfig import RunConfig
     from gpmotion.task import get_task
-    task_name, fam_name, params, options, _, _ = CONFIGS[name]
+    import gpmotion
+    for folder in plugins:
+        gpmotion.load_plugins(folder)
+    task_name, fam_name, params, options, _, _ = config or CONFIGS[name]
     resolved = _resolved(params)
     cfg = RunConfig(task=task_name, family=fam_name, seed=seed, params=resolved,
                     family_options=dict(options), threads=1,
@@ -414,7 +458,20 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true", help="print the results as JSON lines too")
     ap.add_argument("--table-only", action="store_true",
                     help="run nothing: the table from the finished runs in --out")
+    ap.add_argument("--study", metavar="FILE.json",
+                    help="configurations of your own, {NAME: [task, family, params, options, gaits, "
+                         "label]} (e.g. a figure variant as params.figure); run them with --configs NAME,...")
+    ap.add_argument("--plugins", action="append", default=[], metavar="DIR",
+                    help="plugin folder a study's task needs (repeatable)")
     args = ap.parse_args(argv)
+    try:
+        import gpmotion
+        for folder in args.plugins:
+            gpmotion.load_plugins(folder)
+        if args.study:
+            CONFIGS.update(read_study(args.study))
+    except (ValueError, OSError) as e:
+        _fail(str(e))
     names = [n.strip() for n in args.configs.split(",") if n.strip()]
     unknown = [n for n in names if n not in CONFIGS]
     if unknown:
@@ -425,8 +482,8 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     results = load_results(out)
-    todo = [] if args.table_only else [(n, s, args.budget, str(out)) for s in seeds for n in names
-                                       if (n, s, args.budget) not in results]
+    todo = [] if args.table_only else [(n, s, args.budget, str(out), CONFIGS[n], tuple(args.plugins))
+                                       for s in seeds for n in names if (n, s, args.budget) not in results]
     try:
         for rec in finished(_job, todo, args.workers):
             results[(rec["config"], rec["seed"], rec["budget"])] = rec

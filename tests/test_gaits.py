@@ -211,6 +211,46 @@ def test_study_never_mixes_in_runs_of_other_settings(tmp_path, capsys):
     assert e.value.code == 2
 
 
+def test_a_study_file_adds_configurations_that_spawned_workers_run(tmp_path, capsys, monkeypatch):
+    """--study: one's own configurations from JSON (here a figure variant), run
+    by two spawned workers, which never see the parent's CONFIGS."""
+    import json
+    import sys
+    study = _study()
+    monkeypatch.setitem(sys.modules, "auslander_2d", study)     # what the workers unpickle by name
+    variant = tmp_path / "short_arms.toml"
+    variant.write_text('extends = "starman"\nname = "starman_short_arms"\n'
+                       '[[joints]]\nname = "arm_l"\nlimits = [-1.5, 0.3]\n')
+    study_file = tmp_path / "study.json"
+    study_file.write_text(json.dumps({"mine": ["starman_travel", "bsr-time",
+                                               {"seconds": 0.5, "figure": str(variant)}, {},
+                                               ["shuffle"], "my short-armed Star-Man"]}))
+    out = tmp_path / "out"
+    study.main(["--study", str(study_file), "--configs", "mine", "--seeds", "2", "--budget", "20",
+                   "--workers", "2", "--out", str(out)])
+    assert "| my short-armed Star-Man | 2 | 20 |" in capsys.readouterr().out
+    recs = [json.loads(p.read_text()) for p in sorted(out.glob("mine-seed*-20.json"))]
+    assert [r["seed"] for r in recs] == [0, 1] and all(r["params"]["figure"] == str(variant) for r in recs)
+
+
+@pytest.mark.parametrize("text, says", [
+    ("{not json", "cannot read"),
+    ('{"star-contact": ["starman_travel", "bsr-time", {}, {}, [], "x"]}', "built-in"),
+    ('{"a": ["no_such_task", "bsr-time", {}, {}, [], "x"]}', "unknown task"),
+    ('{"a": ["starman_travel", "gp", {}, {}, [], "x"]}', "BSR family"),
+    ('{"a": ["starman_travel", "bsr-time", {}, {}, ["moonwalk"], "x"]}', "gaits"),
+    ('{"a": ["starman_travel", "bsr-time", {}]}', "must be"),
+    ("[]", "JSON object"),
+])
+def test_a_bad_study_file_is_one_line_and_exit_2(tmp_path, capsys, text, says):
+    f = tmp_path / "study.json"
+    f.write_text(text)
+    with pytest.raises(SystemExit) as e:
+        _study().main(["--study", str(f), "--configs", "a", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert e.value.code == 2 and len(err) == 1 and says in err[0] and err[0].startswith("auslander_2d: ")
+
+
 def test_study_leaves_numba_threads_alone(tmp_path):
     """run_one in a process with running numba threads must not change NUMBA_NUM_THREADS:
     numba re-reads it before compiling, and every later compile in the process fails."""
