@@ -189,7 +189,8 @@ def read_study(path: str) -> dict:
     except (OSError, ValueError) as e:
         raise ValueError(f"{path}: cannot read a study ({e})") from None
     if not isinstance(data, dict) or not data:
-        raise ValueError(f"{path}: a study is a JSON object {{NAME: [task, family, params, options, gaits, label]}}")
+        raise ValueError(f"{path}: a study is a JSON object "
+                         f"{{NAME: [task, family, params, options, gaits, label]}}")
     out = {}
     for name, entry in data.items():
         where = f"{path}: {name!r}"
@@ -201,8 +202,10 @@ def read_study(path: str) -> dict:
         if not isinstance(task, str) or task not in task_names() + task_ids():
             raise ValueError(f"{where}: unknown task {task!r} (a plugin's needs --plugins)")
         if family not in family_names() or not family.startswith("bsr"):
-            raise ValueError(f"{where}: family must be a BSR family (bsr-time, bsr-sense), got {family!r}")
-        if not (isinstance(params, dict) and isinstance(options, dict) and isinstance(label, str)):
+            raise ValueError(f"{where}: family must be a BSR family (bsr-time, bsr-sense), "
+                             f"got {family!r}")
+        if not (isinstance(params, dict) and isinstance(options, dict)
+                and isinstance(label, str)):
             raise ValueError(f"{where}: params and options must be objects, label a string")
         if not (isinstance(expected, list) and all(g in gaits.GAITS for g in expected)):
             raise ValueError(f"{where}: gaits must be a list of {', '.join(gaits.GAITS)}")

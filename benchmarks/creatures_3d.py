@@ -130,8 +130,8 @@ def search(task, family: str, seed: int, budget: int, stop_on_success=False, **o
     else:
         best = s.best
     traj, costs, measures, ok = replay_genome(task, fam, ACTUATION, best)
-    facts = {"seed": seed, "evaluations": evals, "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
-             "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
+    facts = {"seed": seed, "evaluations": evals, "wall_s": time.perf_counter() - t0,
+             "cpu_s": time.process_time() - c0, "first_success": first, "success": bool(ok[0]), "cost": float(costs[0]),
              "describe": task.describe(traj, measures), "options": dict(fam.options)}
     return best, fam, facts
 
@@ -146,13 +146,18 @@ def _start(job):
             "genome": fam.to_json(best)}
 
 
-def multistart(a) -> int:
+def _one_numba_thread() -> None:
+    """One numba thread per search (spawned workers read it), unless numba runs already."""
     import os
+    if "numba" not in sys.modules:
+        os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+
+def multistart(a) -> int:
     if min(a.starts, a.seeds, a.workers) < 1 or a.budget < 20:
         print("creatures_3d.py: need --starts, --seeds, --workers >= 1 and --budget >= 20", file=sys.stderr)
         return 2
-    if "numba" not in sys.modules:       # one numba thread per search (the spawned workers read it)
-        os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    _one_numba_thread()
     import gpmotion
     params = dict(kv.split("=", 1) for kv in a.param)
     try:
@@ -259,6 +264,7 @@ def sequence(a) -> int:
     if min(a.starts, a.workers) < 1 or min(a.budget, a.budget_walk2 or a.budget) < 20:
         print("creatures_3d.py: need --starts, --workers >= 1 and budgets >= 20", file=sys.stderr)
         return 2
+    _one_numba_thread()
     t_pers = a.t_per or [None] * 3
     budgets = (a.budget, a.budget, a.budget_walk2 or a.budget)
     out = Path(a.out or "runs/creatures-sequence")
