@@ -27,7 +27,10 @@ Classes, checked in this order (the first that holds wins):
 ``periodic shuffle``  a shuffle whose motion repeats: see below.
 ``shuffle``    less than a full rotation, contact never lost (no flight
                phase) and a foot down in ≥ 90 % of frames (the feet carry
-               the figure; they are never both lifted for long).
+               the figure; they are never both lifted for long).  Posture
+               is not checked: a figure that sinks low on its legs still
+               shuffles (every Star-Man shuffle on the reproduction
+               figures does, centre of mass 0.08-0.12 m at its lowest).
 ``other``      anything else (a single jump, a crawl on hands or back, a
                fall, or travel under ``MIN_TRAVEL`` = 0.1 m).
 
