@@ -112,3 +112,9 @@ def test_steps_replays_a_controller_on_the_figure_variant_it_was_searched_on(tmp
     save_controller(tmp_path / "best.json", task, fam.random(np.random.default_rng(0)), family=fam)
     assert _bench().main(["steps", "--task", "bob_walk-v3", str(tmp_path / "best.json")]) == 0
     assert "| bob_walk-v3 |" in capsys.readouterr().out
+
+
+def test_speed_reports_the_period_it_searched_with(capsys):
+    assert _bench().main(["speed", "--budget", "20", "--t-per", "0.5"]) == 0
+    assert "t_per 0.5 s" in capsys.readouterr().out
+    assert _bench().FAMILY_OPTIONS["rex_walk"]["bsr-time"]["t_per"] == 0.4     # the best measured
