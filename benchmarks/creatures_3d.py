@@ -91,6 +91,11 @@ def seconds(text: str) -> float:
     return v
 
 
+def period(t_per) -> dict:
+    """The family-option override for a time-based period (none: the default's)."""
+    return {} if t_per is None else {"t_per": t_per}
+
+
 def t_per_list(text: str) -> list[float]:
     """One t_per for the three stages, or three (walk, turn, walk2) (argparse type)."""
     vals = [seconds(x) for x in text.split(",")]
@@ -247,7 +252,7 @@ def judge(a) -> int:
 def _stage(task, seed: int, budget: int, t_per, starts: int = 1, workers: int = 1):
     """A stage's controller: one search of seed ``seed``, or with ``starts`` K > 1
     the cheapest of K (seeds seed·K … seed·K + K − 1, as ``multistart``)."""
-    overrides = {} if t_per is None else {"t_per": t_per}
+    overrides = period(t_per)
     if starts == 1:
         return search(task, "bsr-time", seed, budget, **overrides)
     from gpmotion.families import make_family
@@ -295,8 +300,7 @@ def sequence(a) -> int:
 def speed(a) -> int:
     import gpmotion
     task = gpmotion.get_task("rex_walk")
-    _, _, f = search(task, "bsr-time", a.seed, a.budget, stop_on_success=True,
-                     **({} if a.t_per is None else {"t_per": a.t_per}))
+    _, _, f = search(task, "bsr-time", a.seed, a.budget, stop_on_success=True, **period(a.t_per))
     if f["first_success"] is None:
         print(f"no acceptable Rex walk in {f['evaluations']} evaluations at t_per {f['options']['t_per']} s "
               f"({f['wall_s']:.0f} s wall, {f['cpu_s']:.0f} s CPU)")
