@@ -291,15 +291,24 @@ def test_every_study_configuration_builds_its_task_and_ground():
     for name in study.CORE:
         task_name, fam, params, options, expected, _ = study.CONFIGS[f"{name}-auslander"]
         core = study.CONFIGS[name]
-        assert (fam, options, expected) == (core[1], core[3], core[4])
+        assert (fam, expected) == (core[1], core[4])
         assert params["figure"] == study.AUSLANDER_FIGURE[task_name]
         assert gpmotion.get_task(task_name, **params).scene().c_ground == study.DAMPED_C
         rest = {k: v for k, v in params.items() if k != "figure"}
-        key, weight, label = study.AUSLANDER_WEIGHTS.get(name, (None, None, core[5]))
-        assert rest == ({**core[2], key: weight} if key else core[2])
+        extra_params, extra_options, label = study.AUSLANDER_TUNING.get(name, ({}, {}, core[5]))
+        assert rest == {**core[2], **extra_params}
+        assert options == {**core[3], **extra_options}
         assert study.CONFIGS[f"{name}-auslander"][5].startswith(label)
     assert study.CONFIGS["star-height-auslander"][2]["w_max_height"] == 0.5
     assert study.CONFIGS["star-rotations-auslander"][2]["w_rotations"] == 4.0
+    # the cyclic gaits repeat a 1 s script; the cartwheel and the tumble do not repeat
+    for name, t_per in (("star-contact", 1.0), ("star-height", 1.0), ("star-rotations", None),
+                        ("beryl-tumble", None), ("beryl-periodic", 0.5)):
+        assert study.CONFIGS[f"{name}-auslander"][3].get("t_per") == t_per
+    # the t_per = T versions stay, differing from the headline in t_per only
+    for name in ("star-contact", "star-height"):
+        head, aperiodic = study.CONFIGS[f"{name}-auslander"], study.CONFIGS[f"{name}-auslander-aperiodic"]
+        assert head[2] == aperiodic[2] and aperiodic[3] == {} and head[4] == aperiodic[4]
 
 
 def test_the_reproduction_figures_differ_from_theirs_only_as_documented():
