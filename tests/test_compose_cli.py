@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from gpmotion.compose.command import main
+from gpmotion.cli.compose import main
 from tests.test_composite import write_controller
 
 

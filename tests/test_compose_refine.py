@@ -10,7 +10,7 @@ import pytest
 from gpmotion.compose import composite as C
 from gpmotion.compose import refine as R
 from gpmotion.compose import script as S
-from gpmotion.compose.command import main
+from gpmotion.cli.compose import main
 from gpmotion.replay import load_controller
 from tests.test_composite import write_controller
 

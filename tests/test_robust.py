@@ -99,7 +99,7 @@ def test_evaluate_is_deterministic_and_aggregates_k_starts():
 def test_robustness_table_nominal_first_and_deterministic(tmp_path, capsys):
     import json as _json
 
-    from gpmotion.compose import robust_command
+    from gpmotion.cli import robustness as robust_command
     from gpmotion.replay import load_controller, replay_genome
     from tests.test_composite import write_controller
     path = write_controller(tmp_path / "c.json", family="bsr-time", seconds=0.5, seed=4)

@@ -1,3 +1,3 @@
-from .command import main
+from ..cli.compose import main
 
 raise SystemExit(main())

@@ -5,8 +5,7 @@
     gpmotion compose SCRIPT --controllers ... --no-search        # score the given switches only
     gpmotion compose SCRIPT --controllers ... --refine limbo     # then refine a phase's controller
 
-cli.py registers it (``add_arguments`` and ``run_command``); ``python -m gpmotion.compose``
-runs the same command.
+``python -m gpmotion.compose`` runs the same command.
 """
 from __future__ import annotations
 
@@ -54,9 +53,9 @@ def _floats(text: str | None, what: str):
 
 
 def run_command(args) -> int:
-    from . import composite as C
-    from . import optimize, session
-    from . import script as S
+    from ..compose import composite as C
+    from ..compose import optimize, session
+    from ..compose import script as S
     script = S.load(args.script)
     text = Path(args.script).read_text(encoding="utf-8")
     switches = _floats(args.transitions, "--transitions")
@@ -94,7 +93,7 @@ def run_command(args) -> int:
 
 def _refine_settings(args, script) -> dict | None:
     """The --refine settings, or None; an option that cannot apply is an error."""
-    from . import composite as C
+    from ..compose import composite as C
     if args.refine is None:
         extra = [f for f, v in (("--refine-rounds", args.refine_rounds),
                                 ("--refine-mutants", args.refine_mutants)) if v is not None]
@@ -116,7 +115,7 @@ def _refine_settings(args, script) -> dict | None:
 
 def _filmstrips(out: Path, careless, best) -> None:
     from ..render3d import render_any
-    from . import composite as C
+    from ..compose import composite as C
     for name, comp in (("careless", careless), ("composite", best)):
         traj, _ = C.run(comp)
         render_any(traj, out / f"{name}.png", None, title=f"{name}: switches {comp.switches.round(2).tolist()} s")
@@ -124,5 +123,5 @@ def _filmstrips(out: Path, careless, best) -> None:
 
 def main(argv=None) -> int:
     """``python -m`` entry: the same as ``gpmotion compose ...`` (one error path, in cli.main)."""
-    from ..cli import main as cli_main
+    from . import main as cli_main
     return cli_main(["compose", *(sys.argv[1:] if argv is None else argv)])

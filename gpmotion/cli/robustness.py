@@ -1,8 +1,5 @@
 """``gpmotion robustness RUN [--trials 100]``: how a controller does from perturbed starts.
 
-Until cli.py registers it: ``python -m gpmotion.compose.robust_command RUN``.
-To register: ``add_arguments(sub.add_parser("robustness", help=HELP))`` and
-``COMMANDS["robustness"] = run_command``.
 """
 from __future__ import annotations
 
@@ -28,7 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_command(args) -> int:
     from ..replay import load_controller
-    from .robust import SIZE_KEYS, Perturbation, robustness, sizes_for
+    from ..compose.robust import SIZE_KEYS, Perturbation, robustness, sizes_for
     task, family, actuation, genome, _ = load_controller(args.source)
     given = {k: getattr(args, k) for k in SIZE_KEYS if getattr(args, k) is not None}
     sizes = Perturbation(**{**asdict(sizes_for(type(task).figure)), **given})
@@ -72,7 +69,7 @@ def _plot(path, r, title):
 
 def main(argv=None) -> int:
     """``python -m`` entry: the same as ``gpmotion robustness ...`` (one error path, in cli.main)."""
-    from ..cli import main as cli_main
+    from . import main as cli_main
     return cli_main(["robustness", *(sys.argv[1:] if argv is None else argv)])
 
 
