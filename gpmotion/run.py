@@ -54,7 +54,7 @@ def build(cfg: RunConfig):
     try:
         task = get_task(cfg.task, **cfg.params)
         family = make_family(cfg.family, task, **cfg.family_options)
-        from .compose.robust import normalize
+        from .robust import normalize
         cfg.robust = normalize(cfg.robust, task)     # the figure's default sizes filled in
         noisy = family.noisy_settings() if cfg.robust else {}   # new starts each generation
         given = {k: v for k, v in cfg.search.items() if v is not None}
@@ -177,17 +177,26 @@ class _Recorder:
         self.rd, self.identity, self.every = rd, identity, every
         self.n_rows, self.evals = n_rows, evals
         self.rows: list[dict] = []
+        self.gens: list[dict] = []         # generations.jsonl records, flushed with the rows
+        self.film = None                   # a GenerationRecorder
         self.last = time.monotonic()
 
     def add(self, row: dict):
         self.rows.append(row)
         self.evals = row["evaluations"]
 
+    def note(self, search, genomes, ev):
+        made = self.film.record(search, genomes, ev, self.evals) if self.film else None
+        if made:
+            self.gens.append(made)
+
     def due(self) -> bool:
         return time.monotonic() - self.last >= self.every
 
     def flush(self, search, elapsed: float):
         rows, self.rows = self.rows, []    # never appended twice, even if interrupted here
+        gens, self.gens = self.gens, []
+        self.rd.append_generations(gens)   # before the checkpoint: a resume trims extras
         self.rd.log_rows(rows)             # before the checkpoint: a resume trims extras
         self.n_rows += len(rows)
         self.rd.save_checkpoint({**self.identity, "search": search.state_dict(),
@@ -250,6 +259,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
             doc = _write_config(rd, cfg, task, family, actuation)
             rec = _Recorder(rd, _identity(doc), 0, 0, every)
         rec.every = every
+        rec.film = _film_recorder(rd, family, task, search, resume)
         if not quiet:
             verb = "resume" if resume else "run"
             print(banner(cfg, task, family, search, actuation, rd, verb), file=sys.stderr)
@@ -279,6 +289,16 @@ def _keep_legacy_noisy(rd: RunDir, cfg) -> None:
         return                         # a bad checkpoint: _restore says what is wrong
     if isinstance(settings, dict) and "fresh_scores" not in settings:
         cfg.search = {**cfg.search, "fresh_scores": False}
+
+
+def _film_recorder(rd: RunDir, family, task, search, resume: bool):
+    """generations.jsonl's recorder; a resume trims the file to its checkpoint
+    and goes on from the last record kept (gpmotion.generations)."""
+    from .generations import GenerationRecorder
+    kept = []
+    if resume:
+        kept = rd.trim_generations(search.logged_generation() if rd.has_checkpoint() else -1)
+    return GenerationRecorder(family, task, kept[-1] if kept else None)
 
 
 def _identity(doc: dict) -> dict:
@@ -444,6 +464,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             search.tell(ev)
             row = _log_row(search, rec.evals + len(genomes), time.perf_counter() - t0)
             rec.add(row)
+            rec.note(search, genomes, ev)
             told = True
             done_now += 1
             if search.done or stop["sig"] is not None or rec.due():

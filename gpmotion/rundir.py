@@ -25,6 +25,7 @@ import csv
 import errno
 import fcntl
 import io
+import json
 import os
 import stat
 import time
@@ -33,8 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from .records import (DEFAULT_MAX_BYTES, FormatError, RunDirError, atomic_write_json,
-                      atomic_write_text, envelope, parse_json)
+from .records import (DEFAULT_MAX_BYTES, FormatError, RunDirError, _no_duplicates,
+                      _reject_constant, atomic_write_json, atomic_write_text, envelope,
+                      parse_json)
 
 LOCK = ".lock"
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
@@ -408,6 +410,64 @@ class RunDir:
         if keep != text:
             atomic_write_text(self.file(self.LOG), keep)
         self._fields = None
+
+
+    # ------------------------------------------------------------ generations.jsonl
+    GENERATIONS = "generations.jsonl"
+
+    def append_generations(self, records: list[dict]) -> None:
+        """Append film records (gpmotion.generations), one JSON line each, one write
+        and one fsync; a link or a hard-linked file is refused as for log.csv."""
+        if not records:
+            return
+        data = "".join(json.dumps(r, separators=(",", ":"), allow_nan=False) + "\n"
+                       for r in records).encode("utf-8")
+        try:
+            fd = os.open(self.file(self.GENERATIONS), os.O_WRONLY | os.O_APPEND | os.O_CREAT
+                         | _NOFOLLOW, 0o666)
+        except OSError as e:
+            why = "it is a symbolic link (not followed)" if e.errno == errno.ELOOP else \
+                (e.strerror or str(e))
+            raise OSError(e.errno, f"cannot write {self.path / self.GENERATIONS}: {why}") from None
+        try:
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
+                raise RunDirError(f"{self.path / self.GENERATIONS}: not a plain file of this "
+                                  "run (a link?); refusing to write it")
+            while data:
+                data = data[os.write(fd, data):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+    def read_generations(self) -> list[dict]:
+        """The film records (complete lines only); [] when the run has none."""
+        if not self.exists(self.GENERATIONS):
+            return []
+        text = self.read_bytes(self.GENERATIONS, 1 << 30).decode("utf-8", "replace")
+        out = []
+        for n, line in enumerate(text.split("\n")[:-1], 1):   # the last piece: torn or ""
+            try:
+                rec = json.loads(line, parse_constant=_reject_constant,
+                                 object_pairs_hook=_no_duplicates)
+            except (ValueError, RecursionError):
+                rec = None
+            if not isinstance(rec, dict) or type(rec.get("generation")) is not int:
+                raise FormatError(f"{self.path / self.GENERATIONS}:{n}: not a generation record")
+            out.append(rec)
+        return out
+
+    def trim_generations(self, last_generation: int) -> list[dict]:
+        """Keep the records up to ``last_generation`` (a resume's checkpoint; -1:
+        none), dropping a torn last line; atomic.  Returns the records kept."""
+        if not self.exists(self.GENERATIONS):
+            return []
+        keep = [r for r in self.read_generations() if r["generation"] <= last_generation]
+        text = "".join(json.dumps(r, separators=(",", ":"), allow_nan=False) + "\n" for r in keep)
+        old = self.read_bytes(self.GENERATIONS, 1 << 30).decode("utf-8", "replace")
+        if text != old:
+            atomic_write_text(self.file(self.GENERATIONS), text)
+        return keep
 
 
 def _cell(v: Any) -> str:
