@@ -29,9 +29,15 @@ def cmd_robustness(args):
     return run_command(args)
 
 
+def cmd_study(args):
+    from .study import run_command
+    return run_command(args)
+
+
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
             "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export,
-            "compose": cmd_compose, "robustness": cmd_robustness}
+            "compose": cmd_compose, "robustness": cmd_robustness,
+            "study": cmd_study}
 __all__ = ["COMMANDS", "main", "parser", "_run_configs"]
 
 
@@ -144,6 +150,8 @@ def parser() -> argparse.ArgumentParser:
     from .robustness import HELP as ROBUST_HELP, add_arguments as add_robust_args
     add_compose_args(sub.add_parser("compose", help=COMPOSE_HELP))
     add_robust_args(sub.add_parser("robustness", help=ROBUST_HELP))
+    from .study import HELP as STUDY_HELP, add_arguments as add_study_args
+    add_study_args(sub.add_parser("study", help=STUDY_HELP))
     return ap
 
 

@@ -1,0 +1,165 @@
+"""Named outcome judges: how a study's result is labelled and whether it succeeded.
+
+A judge has two halves, so a table can be re-judged without re-running a
+search (``gpmotion study table DIR --judge NAME``):
+
+* ``measure`` sees the replayed best controller (or, for a composite judge,
+  the stages' controllers run as one composite) and returns the *kept
+  measures*: plain numbers the ledger stores;
+* ``decide`` turns kept measures (and the configuration's ``expect``) into
+  ``(success, label)``; success is None when the judge has no test for the
+  configuration (a gait judge without expected gaits).
+
+Judges measuring the same things share kept measures: every single-search
+row keeps the task's measures *and* the gait features where the figure is a
+planar traveller, so ``task`` and ``gait`` re-judge each other's ledgers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Judge:
+    name: str
+    doc: str
+    labels: tuple
+    decide: Callable            # (kept: dict, expect: list) -> (success | None, label)
+    composite: bool = False     # judges a staged configuration's composite
+    needs: tuple = ()           # kept measures ``decide`` reads
+
+
+_JUDGES: dict[str, Judge] = {}
+
+
+def register_judge(judge: Judge) -> Judge:
+    if judge.name in _JUDGES and _JUDGES[judge.name] is not judge:
+        raise ValueError(f"judge {judge.name!r} is already registered")
+    _JUDGES[judge.name] = judge
+    return judge
+
+
+def get_judge(name: str) -> Judge:
+    if name not in _JUDGES:
+        from ..names import unknown
+        raise KeyError(unknown("judge", name, _JUDGES))
+    return _JUDGES[name]
+
+
+def judge_names() -> list[str]:
+    return sorted(_JUDGES)
+
+
+def rejudge(row: dict, name: str, expect: list) -> tuple:
+    """(success, label) of a ledger row under judge ``name``, from its kept measures."""
+    j = get_judge(name)
+    kept = row.get("measures") or {}
+    missing = [k for k in j.needs if k not in kept]
+    if missing:
+        raise ValueError(f"judge {name!r} needs measures {missing} the ledger's "
+                         f"{row.get('config')} rows do not keep")
+    return j.decide(kept, expect)
+
+
+# ------------------------------------------------------------------ measuring
+
+def single_measures(task, traj, measures: dict, ok) -> dict:
+    """What a single search's row keeps: the task's measures of the best
+    controller, its success test, and the gait features of a planar traveller."""
+    kept = {"task_success": bool(ok[0])}
+    for k, v in measures.items():
+        x = float(np.asarray(v).reshape(-1)[0])
+        kept[k] = x if np.isfinite(x) else None
+    fig = traj.figure
+    if fig.dimensions == 2 and any(n.startswith("foot") for n in fig.contact_names):
+        from .. import gaits
+        f = gaits.trajectory_features(traj)
+        kept.update({f"gait_{k}": v for k, v in f.__dict__.items()})
+    return kept
+
+
+# ------------------------------------------------------------------ the judges
+
+def _task_decide(kept: dict, expect: list):
+    ok = bool(kept["task_success"])
+    return ok, "solved" if ok else "not solved"
+
+
+register_judge(Judge(
+    "task", "the task's own success test (its threshold)", ("solved", "not solved"),
+    _task_decide, needs=("task_success",)))
+
+
+def _gait_decide(kept: dict, expect: list):
+    from ..gaits import GaitFeatures, classify
+    f = GaitFeatures(**{k[5:]: kept[k] for k in _GAIT_KEYS})
+    label = classify(f)
+    return (label in expect) if expect else None, label
+
+
+_GAIT_KEYS = ("gait_distance", "gait_turns", "gait_flights", "gait_airborne",
+              "gait_feet_down", "gait_switches", "gait_period")
+
+
+def _gait_labels():
+    from ..gaits import GAITS
+    return tuple(GAITS)
+
+
+register_judge(Judge(
+    "gait", "the planar gait classifier (gpmotion.gaits); success: an expected gait",
+    ("cartwheel", "tumble", "hop", "periodic shuffle", "shuffle", "other"),
+    _gait_decide, needs=_GAIT_KEYS))
+
+
+# Rex's walk → turn → walk: every stage judged on its own frames of the composite
+SEQUENCE_WALK_M, SEQUENCE_TURN_DEG = 1.0, 45.0
+
+
+def rex_sequence_measures(paths, names) -> dict:
+    """The stages' controllers run as one composite (state carried across each
+    switch), each stage measured on its own frames by Rex's measures."""
+    from dataclasses import replace
+
+    from ..compose import composite
+    from ..tasks._creature3d import creature_measures
+    from ..tasks.rex_walk import RexTask
+    comp = composite.from_controllers([str(p) for p in paths], names=list(names))
+    traj, bounds = composite.run(comp)
+    whole, parts = traj.episode(0), []
+    for k in range(len(paths)):
+        sl = slice(int(bounds[0, k]), int(bounds[0, k + 1]) + 1)
+        piece = replace(whole, q=whole.q[:, sl], qd=whole.qd[:, sl], com=whole.com[:, sl],
+                        contact_force=whole.contact_force[:, sl], times=whole.times[sl])
+        parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
+                                       min_height=RexTask.min_height))
+    kept = {}
+    for name, p in zip(names, parts):
+        kept[f"{name}_distance_m"] = float(p["distance"][0])
+        kept[f"{name}_turn_deg"] = float(np.degrees(p["turn"][0]))
+        kept[f"{name}_fell"] = bool(p["fall"][0] > 0)
+    kept["stages"] = list(names)
+    return kept
+
+
+def _sequence_decide(kept: dict, expect: list):
+    """walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m (stages in order), never fallen."""
+    names = kept["stages"]
+    if len(names) != 3:
+        raise ValueError(f"judge 'walk-turn-walk' needs three stages, got {names}")
+    w1, t, w2 = names
+    ok = (kept[f"{w1}_distance_m"] >= SEQUENCE_WALK_M and kept[f"{t}_turn_deg"] >= SEQUENCE_TURN_DEG
+          and kept[f"{w2}_distance_m"] >= SEQUENCE_WALK_M
+          and not any(kept[f"{n}_fell"] for n in names))
+    return ok, "completes" if ok else "incomplete"
+
+
+register_judge(Judge(
+    "walk-turn-walk", "a 3-D creature's walk, turn, walk as one composite: walk ≥ 1 m, "
+    "turn ≥ 45°, walk ≥ 1 m, never fallen", ("completes", "incomplete"),
+    _sequence_decide, composite=True, needs=("stages",)))
+
+COMPOSITE_MEASURES = {"walk-turn-walk": rex_sequence_measures}
