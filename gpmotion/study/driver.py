@@ -100,7 +100,9 @@ def search_once(stage: Stage, search_seed: int, run_dir: Path, after: list[str],
     cfg = run_config(stage, search_seed, after, scheduler)
     resumed = (run_dir / "config.json").exists()
     c0 = time.process_time()
-    run(cfg, run_dir, resume=resumed, quiet=quiet, artifacts=False)
+    # a run killed before its config.json was whole is no run yet: moved aside, begun again
+    begun = run_dir.is_dir() and not resumed and any(p.name != ".lock" for p in run_dir.iterdir())
+    run(cfg, run_dir, resume=resumed, force=begun, quiet=quiet, artifacts=False)
     cpu = time.process_time() - c0
     best = read_json(run_dir / "best.json", kind="best")
     log = list(csv.DictReader(io.StringIO((run_dir / "log.csv").read_text())))

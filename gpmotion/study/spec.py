@@ -171,8 +171,11 @@ def parse(doc: dict, *, quick: bool = False) -> Spec:
         if quick:
             merged = _quick(merged, quick_t)
         out[cname] = _configuration(cname, merged, where)
+    if quick_t:
+        quick_seeds = _quick_seeds(quick_t, tune, report)     # checked with or without --quick
+        _quick(dict(defaults), quick_t)
     if quick:
-        tune, report = _quick_seeds(quick_t, tune, report)
+        tune, report = quick_seeds
     return Spec(name=name, title=_str(study, "title", "study", name),
                 description=_str(study, "description", "study", ""),
                 tune_seeds=tune, report_seeds=report, configurations=out,
