@@ -1,7 +1,8 @@
 """Every code block of the tutorial and the how-to guides runs, so the docs cannot rot.
 
-Per page, in order, in one scratch folder (so a later block may use an earlier
-block's run directory or files):
+Per page, in order, in one scratch folder that holds a link to the checkout's
+``examples/`` (so a later block may use an earlier block's run directory or
+files, and any block the shipped examples):
 
 * a block with a ``title="PATH"`` attribute is a file the reader creates: it is
   written to PATH;
@@ -141,6 +142,7 @@ def run_console(block: Block, cwd: Path, env: dict, where: str) -> None:
 
 def run_page(page: Path, cwd: Path) -> int:
     env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": str(cwd)}
+    (cwd / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
     ran = 0
     for block in blocks(page.read_text(encoding="utf-8")):
         where = f"{page.relative_to(ROOT)}:{block.line}"
