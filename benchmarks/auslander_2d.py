@@ -261,7 +261,7 @@ for _t in (1.0, 0.75, 0.5):
 # The reproduction's figures (the headline table, the default --configs):
 # gpmotion/figures/{starman,beryl}_auslander.toml, a ground that does not
 # bounce and Star-Man's five rods equal.  Each choice below was made on seeds
-# 0-4 and checked on fresh seeds (docs/auslander_2d.md):
+# 0-4 and checked on fresh seeds (docs/reproduction/auslander.md):
 # * the cartwheel needs rotations weighted as Beryl's tumble is (w 4; at 0.5
 #   the searches hop);
 # * the hop needs max_height weighted 0.5: at 2 a single high jump is the

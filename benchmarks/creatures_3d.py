@@ -29,7 +29,7 @@
   (``0.4,0.5,0.4``; default FAMILY_OPTIONS'); ``--starts K`` makes the walk
   the cheapest of K searches (as ``multistart``); ``--budget-walk2`` gives
   the second walk its own budget.  Each stage's task, search seed(s) and
-  family options are in sequence.json.  Session 24's pipeline (2/5 seeds
+  family options are in sequence.json.  The shipped pipeline (2/5 seeds
   complete): ``--starts 3 --budget 20000 --budget-walk2 60000 --t-per 0.4,0.5,0.4``.
 * ``speed``: one time-based Rex walk search until its first acceptable
   controller (``rex_walk`` solved: its success threshold); wall and CPU
@@ -66,7 +66,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _pool import finished  # noqa: E402
 
 ACTUATION = "kinematic"
-# Rex's periods are the best measured (docs/creatures.md): walks solved 1/5 at
+# Rex's periods are the best measured (docs/reproduction/auslander.md): walks solved 1/5 at
 # t_per 1.0 s, 4/10 at 0.5, 5/10 at 0.4 (20,000 evaluations); the settled turn
 # solved 6 of 7 at 0.5.  Bob keeps 1.0 s, the period of every Bob table.
 FAMILY_OPTIONS = {

@@ -66,7 +66,7 @@ EXTRA = {   # not in the bar; --only names them
     "touch/elbow_l": ("herman_touch", {"site": "elbow_l"}),
     "touch/nose": ("herman_touch", {"site": "nose"}),
     "grasp": ("herman_grasp", {}),
-    # the versions before the forearm check, as controls (session 16)
+    # the versions before the forearm check, as controls
     "point/v1": ("herman_point-v1", {}),
     "wave/v1": ("herman_wave-v1", {}),
     "grasp/v1": ("herman_grasp-v1", {}),

@@ -279,7 +279,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
 
 
 def _keep_legacy_noisy(rd: RunDir, cfg) -> None:
-    """A robust run checkpointed before ``fresh_scores`` existed (session 11) resumes
+    """A robust run checkpointed before ``fresh_scores`` existed resumes
     as it began: without them (its checkpoint's search settings name none)."""
     if not cfg.robust or "fresh_scores" in cfg.search or not rd.has_checkpoint():
         return

@@ -54,7 +54,7 @@ MAIN_WEIGHT = 10.0
 # 2/5 to 4/5 seeds at 250 × 40, and seed 0 (3.6 cm at 250 × 40) reaches the
 # nose at 400 × 50.
 GP_DEFAULTS = {"population": 400, "generations": 50, "p_crossover": 0.85, "p_creep": 0.1}
-# The nose's search (herman_touch_nose, session 12): angle targets, and the last
+# The nose's search (herman_touch_nose): angle targets, and the last
 # 20 of the 50 generations polish the best; the versions that take it name it.
 NOSE_SEARCH = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}}
 
@@ -211,7 +211,7 @@ class TrunkCheck:
 
     Herman has no self-collision, and v1's ``through`` watched the hand and
     fingertip sites alone, so a forearm could pass through the trunk with
-    both outside (session 15: 3 of touch_nose's 4 successes did).  The
+    both outside (3 of touch_nose's 4 successes did).  The
     checked version adds ``limbs_through_torso`` of the forearm's and hand's
     capsules to ``through`` (so a population that never crosses is scored as
     before), measures ``crossing`` (the deepest overlap, m) and requires it
@@ -220,8 +220,8 @@ class TrunkCheck:
 
     ``charge = False`` judges the crossing without charging it: the cost,
     and so the search, stay the previous version's.  For tasks whose
-    searches do not cross anyway and which charging made worse (session 16:
-    point 4 / 5 -> 2 / 5, wave 5 / 5 -> 1 / 5, grasp 5 / 5 -> 4 / 5; their
+    searches do not cross anyway and which charging made worse (point
+    4 / 5 -> 2 / 5, wave 5 / 5 -> 1 / 5, grasp 5 / 5 -> 4 / 5; their
     v1 best controllers crossed at most 0.7 cm in 5 seeds)."""
     charge = True
 

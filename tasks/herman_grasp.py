@@ -40,7 +40,7 @@ class HermanGrasp(HermanTask):
     description = "Herman picks a ball up from a table and lifts it"
     params = {"lift": 0.10, "seconds": 2.0}
     # 36 generations, not 50: the grip forms in the first 0.15 s and lifting
-    # is found early; 50 took 89-108 s of main-thread CPU.  Session 9, 5 seeds
+    # is found early; 50 took 89-108 s of main-thread CPU.  5 seeds
     # each: 5 / 5 at 42 (88-97 s), 5 / 5 at 36 (docs/notes/herman.md)
     gp_defaults = {**GP_DEFAULTS, "generations": 36}
     bounds = {"lift": (0.0, 0.3)}
@@ -133,7 +133,7 @@ class HermanGrasp(HermanTask):
 class HermanGraspV2(TrunkCheck, HermanGrasp):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     v1's seed 0 did not cross; the check is on every Herman task).
-    docs/notes/herman.md, session 16."""
+    docs/notes/herman.md."""
     version = 2
 
 
@@ -141,7 +141,7 @@ class HermanGraspV2(TrunkCheck, HermanGrasp):
 class HermanGraspV3(TrunkCheck, HermanGrasp):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
-    trunk.  Session 16, 5 seeds: v2 (charged) 4 / 5, v1's search 5 / 5, whose
+    trunk.  5 seeds: v2 (charged) 4 / 5, v1's search 5 / 5, whose
     best controllers never crossed (0.0 cm); docs/notes/herman.md."""
     version = 3
     charge = False

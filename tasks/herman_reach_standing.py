@@ -12,7 +12,7 @@ of the pelvis from where it stood (m), plus 1 if it drops by more than
 the ground's normal force on each sole point (``force_heel_r``,
 ``force_toe_r``, ``force_heel_l``, ``force_toe_l``; N, ~170 each standing
 still), whose shifts tell a controller how the body's weight moves over its
-feet.  Off by default: the measured success rates (docs/gritz_hahn.md) are
+feet.  Off by default: the measured success rates (docs/reproduction/gritz_hahn.md) are
 for the default terminal set.
 """
 from dataclasses import replace
@@ -42,7 +42,7 @@ class HermanReachStanding(HermanTouchObject):
     description = "Herman, standing free on his feet, touches an object and keeps his balance"
     # Rate targets, as herman_touch_object (inherited), and 35 generations: a
     # generation of the standing body costs ~3 s of main-thread CPU, so 50 took
-    # 121-148 s; session 9, 5 seeds: 3 / 5 solved in 104-112 s (angle, 50: 0 / 5)
+    # 121-148 s; 5 seeds: 3 / 5 solved in 104-112 s (angle, 50: 0 / 5)
     gp_defaults = {**GP_DEFAULTS, "generations": 35}
     terms = HermanTouchObject.terms + (
         Term("balance", MAIN_WEIGHT, doc="largest horizontal pelvis excursion (m), +1 if it fell"),)
@@ -86,8 +86,8 @@ class HermanReachStandingV2(HermanReachStanding):
     figure's own stability bounds do not need (herman_standing.toml: still
     < 2 at 2 ms), and over random arm motions with the pelvis within 5 cm
     the fingertip stays within 8 mm of a 0.5 ms run (test_herman); at 1 ms a
-    run could afford 35 generations (3 / 5 in 104-112 s, session 9), at 2 ms
-    50 with polish: session 13, 5 seeds, 4 / 5 in 62-67 s (docs/notes/herman.md)."""
+    run could afford 35 generations (3 / 5 in 104-112 s), at 2 ms
+    50 with polish: 5 seeds, 4 / 5 in 62-67 s (docs/notes/herman.md)."""
     version = 2
     dt = 2e-3
     record_every = 5
@@ -97,8 +97,8 @@ class HermanReachStandingV2(HermanReachStanding):
 @register_task
 class HermanReachStandingV3(TrunkCheck, HermanReachStandingV2):
     """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
-    session 15 found v2's seed 0 with the forearm 8.3 cm
-    into the trunk).  docs/notes/herman.md, session 16."""
+    the forearm check found v2's seed 0 with the forearm 8.3 cm
+    into the trunk).  docs/notes/herman.md."""
     version = 3
 
 
@@ -111,10 +111,10 @@ class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
     from hanging meets it first) and travels in a straight line to its place
     over the first 70 % of the run (``EASE``).  The recipe alone left seeds
     settled 9-10 cm short with the arm folded, a pose no search left
-    (sessions 18 and 20: 3 / 5, the misses never touching); with the
+    (3 / 5, the misses never touching); with the
     curriculum every seed touched at rest but two struck the trunk hard
     enough at the start to sink the forearm 1.0-1.2 cm into it for an instant
-    (3 / 5), which the heavier through term charges.  Session 21, 5 seeds:
+    (3 / 5), which the heavier through term charges.  5 seeds:
     4 / 5 in 78-100 s of main-thread CPU.  docs/notes/herman.md."""
     version = 4
     gp_targets, gp_defaults = NOSE_SEARCH["gp_targets"], NOSE_SEARCH["gp_defaults"]

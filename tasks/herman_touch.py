@@ -154,7 +154,7 @@ class HermanTouch(HermanTask):
 class HermanTouchV2(HermanTouch):
     """v2: the recipe that settles ``herman_touch_object`` on sites other than
     the nose.  Under v1 (angle targets, no polish) the sites off the right
-    arm's plane failed by not coming to rest (session 14, 4 runs: knee_l 4.0
+    arm's plane failed by not coming to rest (4 runs: knee_l 4.0
     and 0.9 cm away moving 19 and 30 cm/s; elbow_l 12.8 and 7.0 cm moving 42
     and 62 cm/s).  v2's trees drive target rates (feedback on the error
     integrates to rest), the last 10 of the 50 generations polish the best,
@@ -196,7 +196,7 @@ class HermanTouchV3(TrunkCheck, HermanTouchV2):
       and the senses' goal, the site at the neutral pose, drifted as the left
       arm moved (3 / 5).  It is a fixed target on the held body, as the nose
       is, and takes the nose's recipe (``ANGLE_SITES``).
-    docs/notes/herman.md, session 15."""
+    docs/notes/herman.md."""
     version = 3
     RIGHT_ARM_REACHES = ("elbow_l",)    # left-arm sites: tests/test_herman.py
     ANGLE_SITES = ("nose", "elbow_l")
@@ -209,12 +209,12 @@ class HermanTouchV3(TrunkCheck, HermanTouchV2):
 class HermanTouchV4(SelfContact, HermanTouchV3):
     """v4: the right forearm and hand collide with the trunk and the pelvis
     (``_herman.SelfContact``), and the angle sites' rest term weighs three
-    times as much, as ``herman_touch_nose-v3``'s.  Session 18, 5 seeds each
+    times as much, as ``herman_touch_nose-v3``'s.  5 seeds each
     (the trials in docs/notes/herman_s17_trials.py: the same cost, scene and
     GP settings, tested): knee_l 5 / 5 (v3 3 / 5), elbow_l 4 / 5 (v3 2 / 5),
     the nose 5 / 5 (the recipe of ``herman_touch_nose-v3``).  A site on the
     trunk is touched with the hand resting on it: the fingertip ends the
     hand's 3 cm capsule, which the contact holds a few millimetres in.
-    docs/notes/herman.md, session 18."""
+    docs/notes/herman.md."""
     version = 4
     ANGLE = {**HermanTouchV3.ANGLE, "w_rest": 3.0}

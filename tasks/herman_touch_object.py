@@ -46,12 +46,12 @@ class HermanTouchObject(HermanTask):
     bounds = {"target": (-1, 2)}
     # The trees drive their joints' target *rates* (gpmotion.gp.bytecode.TargetLaw):
     # a tree of the fingertip's error then settles on the object, where an angle
-    # target settles short by the servo's sag.  Session 9, 5 seeds each: target 0
+    # target settles short by the servo's sag.  5 seeds each: target 0
     # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5); docs/notes/herman.md.
     gp_targets = "rate"
     # The last 10 of the 50 generations tune the best controller (--polish; memetic GP):
-    # session 12, 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
-    # 20 of 50: 3, 3, 4; target 1 with the limits term, session 13: 3); docs/notes/herman.md.
+    # 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
+    # 20 of 50: 3, 3, 4; target 1 with the limits term: 3); docs/notes/herman.md.
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
     preset_weights: ClassVar[dict] = {}      # preset -> its own default term weights (v2)
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
@@ -125,14 +125,14 @@ class HermanTouchObject(HermanTask):
 @register_task
 class HermanTouchObjectV2(HermanTouchObject):
     """v2: target 1 (low, beside the right hip) charges two things by default.
-    Its misses under v1 (session 12, 5 seeds: 2 / 5) ended 11-14 cm short on a
+    Its misses under v1 (5 seeds: 2 / 5) ended 11-14 cm short on a
     pose with 4 of the arm's 6 joints on their limits (a constant tree drives a
     rate target to its limit: the easy near-solution there): the limits term at
     weight 2 turned them into touches (3 / 5), but two of those still moved
     faster than the rest rule allows (5.4 and 13.4 cm/s).  The rest term three
-    times as heavy settles them: 4 / 5 (session 14).  Targets 0 and 2 solve on
+    times as heavy settles them: 4 / 5.  Targets 0 and 2 solve on
     poses with joints on their limits, so they keep v1's weights (charged the
-    same they solved 2 / 3 and 0 / 3, session 13); docs/notes/herman.md."""
+    same they solved 2 / 3 and 0 / 3); docs/notes/herman.md."""
     version = 2
     preset_weights = {1: {"w_limits": 2.0, "w_rest": 3.0}}
 
@@ -140,8 +140,8 @@ class HermanTouchObjectV2(HermanTouchObject):
 @register_task
 class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
     """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
-    session 15 found v2's seed 0 on target 0 with the forearm 8.0 cm
-    into the belly, on target 1 5.8 cm).  docs/notes/herman.md, session 16."""
+    the forearm check found v2's seed 0 on target 0 with the forearm 8.0 cm
+    into the belly, on target 1 5.8 cm).  docs/notes/herman.md."""
     version = 3
 
 
@@ -150,12 +150,12 @@ class HermanTouchObjectV4(HermanTouchObjectV3):
     """v4: target 1 takes the nose's recipe: the right forearm and hand
     collide with the trunk and the pelvis (``_herman.with_self_contact``), the trees
     drive angle targets and the last 20 of the 50 generations polish (its
-    v2 weights stay: limits 2, rest x3).  Session 18, 5 seeds: 4 / 5 in
+    v2 weights stay: limits 2, rest x3).  5 seeds: 4 / 5 in
     64-71 s of main-thread CPU (v3: 0 / 5; v3 with self-contact and rate
-    targets, session 17: 2 / 5).  Targets 0 and 2 keep v3's search, without
-    self-contact: with it and rate targets they solved 4 / 5 and 3 / 5
-    (session 17), with angle targets and polish 20 0 / 2 and 0 / 2 (session
-    18, stopped), against v3's 5 / 5 and 5 / 5.  docs/notes/herman.md."""
+    targets: 2 / 5).  Targets 0 and 2 keep v3's search, without
+    self-contact: with it and rate targets they solved 4 / 5 and 3 / 5,
+    with angle targets and polish 20 0 / 2 and 0 / 2 (stopped), against
+    v3's 5 / 5 and 5 / 5.  docs/notes/herman.md."""
     version = 4
     CONTACT_PRESETS = (1,)           # the presets on the nose's recipe
     RECIPE = NOSE_SEARCH

@@ -87,7 +87,7 @@ class HermanWave(HermanTask):
     description = "Herman raises the right hand above the shoulder and waves"
     params = {"seconds": 2.4}
     # 36 generations, not 50: its 2.4 s episodes made 50 take 100-132 s of
-    # main-thread CPU; session 9, 5 seeds: 5 / 5 solved in 75-83 s
+    # main-thread CPU; 5 seeds: 5 / 5 solved in 75-83 s
     gp_defaults = {**GP_DEFAULTS, "generations": 36}
     goal_label = "raised-hand point"   # pictures: the scene goal, captioned
     terms = (Term("wave", MAIN_WEIGHT, main=True,
@@ -122,7 +122,7 @@ class HermanWave(HermanTask):
 class HermanWaveV2(TrunkCheck, HermanWave):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     v1's seed 0 touched it, 0.7 cm, within the allowance;
-    the check is on every Herman task).  docs/notes/herman.md, session 16."""
+    the check is on every Herman task).  docs/notes/herman.md."""
     version = 2
 
 
@@ -130,7 +130,7 @@ class HermanWaveV2(TrunkCheck, HermanWave):
 class HermanWaveV3(TrunkCheck, HermanWave):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
-    trunk.  Session 16, 5 seeds: v2 (charged) 1 / 5, v1's search 5 / 5,
+    trunk.  5 seeds: v2 (charged) 1 / 5, v1's search 5 / 5,
     whose best controllers crossed at most 0.7 cm (allowed: 1);
     docs/notes/herman.md."""
     version = 3

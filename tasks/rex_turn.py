@@ -7,7 +7,7 @@ Solved: heading changed by ≥ 45° without falling.
 
 v3 (the default) is a turn that stops: v2's turns spun 122-471° in 3 s and
 handed over still spinning (230°/s), and no second walk searched from them
-reached 1 m (docs/creatures.md, sessions 15 and 23-24).
+reached 1 m (docs/reproduction/auslander.md).
 """
 import numpy as np
 
@@ -46,7 +46,7 @@ class RexTurnV3(RexTurnV2):
     """v3: the heading change pays up to ``target_degrees``, each radian past
     it costs ``w_over`` and the yaw rate over the motion's last 0.25 s costs
     ``w_spin`` per rad/s, so the second walk starts from a settled turn.
-    Success is v2's.  (Session 23's plugin ``rex_turn_settled``, shipped:
+    Success is v2's.  (It is the plugin ``rex_turn_settled`` shipped:
     with it the walk → turn → walk sequence completed on 2 of 5 seeds.)"""
     version = 3
     description = "Rex turns by about 90° and stops turning, without falling"

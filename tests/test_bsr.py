@@ -526,7 +526,7 @@ def test_bsr_variation_uses_the_c_librarys_exp_bit_for_bit():
     """numpy's float64 exp has its own SIMD path on AVX-512 machines that
     rounds some results differently from the C library's: genome.exp goes
     element by element through math.exp, so a seed breeds the same genome on
-    every machine (session 17: a golden run's tau differed by one ulp)."""
+    every machine (a golden run's tau differed by one ulp)."""
     from gpmotion.bsr.genome import exp, log_uniform
     x = np.random.default_rng(0).normal(0.0, 3.0, (7, 5))
     assert [float(v) for v in exp(x).ravel()] == [math.exp(v) for v in x.ravel().tolist()]

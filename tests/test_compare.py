@@ -119,7 +119,7 @@ def test_phase_window():
 
 
 def test_the_table_says_how_many_runs_found_a_solver_beside_the_best_controllers_success():
-    """A run can meet a solver its best by cost is not (Cujo's GP, session 22): the
+    """A run can meet a solver its best by cost is not (Cujo's GP): the
     table must not show a median of first solvers under a 0 % success without the count."""
     from gpmotion.compare import summarize, table_markdown
     runs = [{"family": "gp", "seed": s, "final_cost": -1.0, "success": False, "wall_s": 1.0,

@@ -365,7 +365,7 @@ def test_creature_reports_read_their_facts_in_order():
 
 
 def _settled_turn(**params):
-    """Session 24's settled turn (seed 0, from its walk), replayed under rex_turn-v3."""
+    """A recorded settled turn (seed 0, from its walk), replayed under rex_turn-v3."""
     from gpmotion.replay import load_controller, replay_genome
     d = Path(__file__).parent / "data" / "rex_turn_v3"
     _, fam, act, genome, rec = load_controller(d / "turn.json")
@@ -375,7 +375,7 @@ def _settled_turn(**params):
 
 
 def test_rex_turn_v3_scores_the_settled_turn_it_was_searched_under():
-    """rex_turn-v3 is session 23's plugin rex_turn_settled shipped: the turn its
+    """rex_turn-v3 is the plugin rex_turn_settled shipped: the turn its
     search found (90°, 4°/s at the handover) scores its recorded cost bit for bit."""
     rec, costs, m, ok = _settled_turn()
     assert costs[0] == rec["cost"] and ok[0]

@@ -53,7 +53,7 @@ def test_multistart_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
 
 
 def test_judge_gives_the_recorded_sequence_its_verdict(capsys):
-    """Session 10's completed walk → turn → walk, judged from its saved controllers."""
+    """A recorded completed walk → turn → walk, judged from its saved controllers."""
     import json
     d = ROOT / "docs" / "notes" / "rex_sequence"
     assert _bench().main(["judge", str(d / "walk.json"), str(d / "turn.json"), str(d / "walk2.json")]) == 0

@@ -546,7 +546,7 @@ HERMAN_TASKS = ("herman_touch", "herman_touch_nose", "herman_touch_object", "her
 
 @pytest.mark.parametrize("name", HERMAN_TASKS)
 def test_every_herman_task_refuses_a_forearm_through_the_trunk(name, monkeypatch):
-    """The newest version of every Herman task carries TrunkCheck (session 15:
+    """The newest version of every Herman task carries TrunkCheck (without it
     forearms crossed the trunk on touch_nose, touch_object and reach_standing):
     on the ACROSS pose its ``through`` is the last unchecked version's plus the
     capsules' excess (or, where the check only judges, ``charge = False``,
@@ -599,7 +599,7 @@ def _assert_same_search_with_self_contact(new, trial):
 @pytest.mark.parametrize("site", ["knee_l", "elbow_l", "nose"])
 def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     """herman_touch-v4 runs the searches its rates were measured with
-    (sessions 17-18, docs/notes/herman_s17_trials.py: herman_touch-v3 with
+    (docs/notes/herman_s17_trials.py: herman_touch-v3 with
     SelfContact, --param w_rest=3): the same terms at the same effective
     weights, scene (with the four contact pairs), GP settings, joints and
     senses; the sites keep v3's recipes (angle on the nose and left elbow,
@@ -612,7 +612,7 @@ def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
 
 
 def test_touch_object_v4_is_the_trial_its_target_1_rate_was_measured_on():
-    """herman_touch_object-v4 on target 1 is the session 18 trial (v3 with
+    """herman_touch_object-v4 on target 1 is the trial (v3 with
     SelfContact, --targets angle --search polish=20): the same terms and
     weights, the four contact pairs, angle targets, polish 20; targets 0
     and 2 are v3's search unchanged (no contact, rate targets, polish 10)."""
@@ -632,7 +632,7 @@ def test_touch_object_v4_is_the_trial_its_target_1_rate_was_measured_on():
     assert get_task("herman_touch_object", target=1).version == 4
 
 
-def test_touch_nose_v3_is_the_session_17_trial():
+def test_touch_nose_v3_is_the_self_contact_trial():
     """herman_touch_nose-v3 runs the search its rate was measured with:
     herman_touch-v3 on the nose with w_rest 3 and Herman's forearm and hand
     colliding with the trunk and the pelvis (docs/notes/herman_s17_trials.py):
@@ -647,7 +647,7 @@ def test_touch_nose_v3_is_the_session_17_trial():
 
 def test_reach_standing_v4_is_v3_with_the_nose_recipe_and_a_travelling_object():
     """herman_reach_standing-v4 = v3 with self-contact, angle targets, polish
-    20, the rest and through terms x3 (the session 21 search whose rate
+    20, the rest and through terms x3 (the search whose rate
     docs/notes/herman.md records), plus the curriculum: the
     object starts at START (pelvis frame) and travels in a line to its place
     over EASE of the run; travel_start=1 keeps it in place."""

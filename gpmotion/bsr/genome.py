@@ -58,7 +58,7 @@ def exp(x):
     numpy's float64 ``exp`` and ``log`` take their own SIMD path on AVX-512
     machines and round some results differently from the C library's (which
     they call elsewhere), so a genome bred from a seed differed in its last
-    bit between machines (session 17: a Mr. Star-Man golden run's τ, bred on
+    bit between machines (a Mr. Star-Man golden run's τ, bred on
     an AVX-512 machine, came out one ulp away on an AVX2 one).  Variation
     goes through here so a seed gives the same genome everywhere."""
     a = np.asarray(x, dtype=np.float64)

@@ -8,7 +8,7 @@ lamp, the atomics took half the step (1.5 µs → 0.75 µs without them).
 must outlive the views (the episode loop's model, scene and output arrays are
 its caller's; its workspace is used once more after the loop, and its state
 and scratch are held to the end by ``hold``).  Borrowing the episode's
-per-episode views and scratch too (session 22) made the sine lamp 7 % faster.
+per-episode views and scratch too made the sine lamp 7 % faster.
 """
 from numba import njit, types
 from numba.core import cgutils

@@ -42,7 +42,7 @@ def self_contact_pairs(figure, pairs, k=4e4, c=40.0) -> np.ndarray:
     forearm held against the trunk sinks in ~3-6 mm; at dt = 2 ms
     √(k/m)·dt = 0.38 and 0.62, c·dt/m = 0.07 and 0.19 for his forearm
     (1.12 kg) and hand (0.42 kg): explicit, like every contact force here,
-    and stable while both stay well below 1 (session 17: at k = 2e4 a GP
+    and stable while both stay well below 1 (at k = 2e4 a GP
     controller pressed its forearm 1.1 cm into the belly; random arm
     motions at dt = 2 ms went 1.9 cm in at 2e4, 1.15 cm at 4e4)."""
     if figure.dimensions != 3:
