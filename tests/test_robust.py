@@ -273,7 +273,7 @@ def test_a_robust_serial_run_judges_mutants_and_parents_on_the_same_starts(tmp_p
 
 @pytest.mark.parametrize("name,rate", [("lamp_hop-robust-seed2", 0.97), ("starman_travel-robust-seed3", 0.98)])
 def test_the_documented_robust_controllers_keep_their_success_rate(name, rate):
-    """docs/composite.md's robustness bar: controllers evolved from perturbed starts,
+    """The robustness bar (docs/reproduction/auslander.md): controllers evolved from perturbed starts,
     judged from the same 100 starts (trial 0 nominal); a change to the simulator, the
     perturbations or the judge that moves these rates must say so in the docs."""
     from pathlib import Path

@@ -18,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     for name, unit in (("joint", "rad"), ("position", "m"), ("orientation", "rad"), ("velocity", "m/s"),
                        ("angular", "rad/s")):
         p.add_argument(f"--{name}", type=float, help=f"σ of the {name} perturbation ({unit}; default: "
-                       "the figure's, docs/composite.md)")
+                       "the figure's, docs/howto/composite.md)")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--plot", metavar="PNG", help="also draw the cost of every trial, successes marked")
 

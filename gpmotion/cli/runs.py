@@ -202,7 +202,7 @@ def _add_robust_arguments(p) -> None:
     g.add_argument("--perturb", metavar="PART=SIGMA,...",
                    help="perturbation sizes (σ) overriding the figure's defaults: "
                         + ", ".join(SIZE_KEYS) + " (rad, m, rad, m/s, rad/s); "
-                        "defaults per figure in docs/composite.md")
+                        "defaults per figure in docs/howto/composite.md")
 
 
 def _robust_setting(args) -> dict:
