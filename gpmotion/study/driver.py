@@ -169,6 +169,10 @@ def run_job(job: Job) -> tuple[dict, dict]:
         _, best, _ = stages[0]
         traj, costs, measures, ok = best["replay"]
         kept = single_measures(best["task"], traj, measures, ok)
+        if judge.extra is not None:
+            b = best["best"]
+            kept.update(judge.extra(best["task"], best["family"], b["actuation"],
+                                    best["family"].from_json(b["genome"])))
     success, label = judge.decide(kept, conf.expect)
     last = stages[-1][1]
     row = {"study": job.study, "config": conf.name, "seed": job.seed, "start": job.start,

@@ -30,6 +30,7 @@ class Judge:
     decide: Callable            # (kept: dict, expect: list) -> (success | None, label)
     composite: bool = False     # judges a staged configuration's composite
     needs: tuple = ()           # kept measures ``decide`` reads
+    extra: Callable | None = None   # (task, family, actuation, genome) -> more kept measures
 
 
 _JUDGES: dict[str, Judge] = {}
@@ -161,5 +162,27 @@ register_judge(Judge(
     "walk-turn-walk", "a 3-D creature's walk, turn, walk as one composite: walk ≥ 1 m, "
     "turn ≥ 45°, walk ≥ 1 m, never fallen", ("completes", "incomplete"),
     _sequence_decide, composite=True, needs=("stages",)))
+
+ROBUST_TRIALS, ROBUST_REQUIRE = 100, 0.9
+
+
+def robust_measures(task, family, actuation, genome) -> dict:
+    """The best controller from ROBUST_TRIALS perturbed starts (trial 0 nominal;
+    the figure's default sizes; a stream no search trains on)."""
+    from ..robust import robustness
+    r = robustness(task, family, actuation, genome, trials=ROBUST_TRIALS, seed=0)
+    return {"robust_success_rate": r["success_rate"], "robust_trials": r["trials"],
+            "robust_nominal_success": r["nominal_success"], "robust_cost_median": r["cost_median"]}
+
+
+def _robust_decide(kept: dict, expect: list):
+    ok = kept["robust_success_rate"] >= ROBUST_REQUIRE
+    return ok, "robust" if ok else "fragile"
+
+
+register_judge(Judge(
+    "robust", f"succeeds from ≥ {ROBUST_REQUIRE:.0%} of {ROBUST_TRIALS} perturbed starts "
+    "(gpmotion robustness)", ("robust", "fragile"), _robust_decide,
+    needs=("robust_success_rate",), extra=robust_measures))
 
 COMPOSITE_MEASURES = {"walk-turn-walk": rex_sequence_measures}

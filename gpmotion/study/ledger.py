@@ -21,6 +21,7 @@ from ..records import FormatError, RunDirError, atomic_write_text, envelope, par
 from ..rundir import RunDir
 
 RESULTS, STUDY, CONTROLLERS = "results.jsonl", "study.json", "controllers"
+SPEC = "spec.toml"           # a shipped study's spec sits beside its ledger
 MAX_LEDGER = 1 << 30
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 ROW_KEYS = ("config", "seed", "start")
@@ -99,7 +100,7 @@ class StudyDir:
         path = Path(path)
         fresh = not (path / STUDY).exists()
         self.path = path
-        if fresh and path.is_dir() and any(path.iterdir()):
+        if fresh and path.is_dir() and any(p.name not in (SPEC, ".lock") for p in path.iterdir()):
             raise RunDirError(f"{path}: exists, is not empty and is not a study directory; "
                               "choose another --out")
         self.rd = RunDir.create(path, resume=path.is_dir())
@@ -107,7 +108,7 @@ class StudyDir:
             if fresh:
                 atomic_write_text(self.rd.file(STUDY), json.dumps(
                     envelope("study", {"digest": digest, "quick": quick, "spec": spec_doc}),
-                    sort_keys=True, indent=1) + "\n")
+                    indent=1, ensure_ascii=False) + "\n")     # the spec's order: the table's
             else:
                 have = read_study(path)
                 if have["digest"] != digest:

@@ -44,7 +44,7 @@ class SpecError(ConfigError):
 
 
 STUDY_KEYS = {"name", "title", "description", "tune_seeds", "report_seeds"}
-RUN_KEYS = {"task", "family", "params", "figure", "options", "budget", "search",
+RUN_KEYS = {"task", "family", "params", "figure", "options", "budget", "search", "preset",
             "actuation", "robust", "starts"}
 CONFIG_KEYS = RUN_KEYS | {"label", "judge", "expect", "stages"}
 STAGE_KEYS = RUN_KEYS | {"name"}
@@ -288,10 +288,17 @@ def _stage(body: dict, where: str, name: str) -> Stage:
         raise SpecError(f"{where}.search: unknown setting(s) {unknown} for {family}; "
                         f"known: {sorted(search_keys(family))}")
     budget = body.get("budget")
-    if budget is not None:
+    if budget is not None:              # none: the family's own settings (as `gpmotion run`)
         budget = _int(budget, f"{where}.budget", 20, 10**9)
-    if budget is None and not search:
-        raise SpecError(f"{where}: give budget (evaluations) or search settings")
+    if "preset" in body:                # the family's named settings, the spec's over them
+        if not isinstance(body["preset"], str):
+            raise SpecError(f"{where}.preset must be a preset's name")
+        from ..families import family_class
+        try:
+            fam_opts, fam_search = family_class(family).apply_preset(body["preset"], task, {}, {})
+        except (ValueError, KeyError) as e:
+            raise SpecError(f"{where}.preset: {e}") from None
+        options, search = {**fam_opts, **options}, {**fam_search, **search}
     actuation = body.get("actuation")
     if actuation not in (None, "pd", "kinematic"):
         raise SpecError(f"{where}.actuation must be 'pd' or 'kinematic', got {_short(actuation)}")
