@@ -18,8 +18,9 @@ from pathlib import Path
 
 from ..records import atomic_write_text
 
-BLOCK = re.compile(r"(<!-- study-table: (?P<args>[^>]*?) -->\n)(?P<body>.*?)(<!-- /study-table -->)",
-                   re.S)
+# markers at the start of a line (an indented example in a code block is none)
+BLOCK = re.compile(r"^(<!-- study-table: (?P<args>[^>\n]*?) -->\n)(?P<body>.*?)^(<!-- /study-table -->)",
+                   re.S | re.M)
 
 
 def pages(root: Path) -> list[Path]:
