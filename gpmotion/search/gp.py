@@ -57,10 +57,23 @@ Decisions, stated once here:
   ``progress = generation / (G - 1)`` (1 for G = 1), so the last generation
   is scored with every style term fully on (``generation / G`` never reaches
   1, and a term ramping up to progress 1 would never count in full).
+* **Stopping.**  A run ends after ``generations``, or earlier on either of
+  two stated criteria: ``patience`` = K > 0 stops once every style term is
+  at full weight (the phase is the final one) and the best under the final
+  weights has improved by less than ``PATIENCE_TOLERANCE`` (relative) over the
+  last K generations; ``phase_span`` = S > 0 lays the phases over the first
+  S generations instead of all ``generations`` (progress = generation /
+  (S - 1), capped at 1), so with patience the run ends when it is done, K
+  generations or more after the last term reached full weight, and
+  ``generations`` is only a cap; ``stop_on_success`` ends the run in the first
+  generation some genome solves the task once the scene is final (``True``)
+  or once every style term is at full weight too (``"full-weight"``, Gritz &
+  Hahn's criterion with the style points in force).
 """
 from __future__ import annotations
 
 import contextlib
+import math
 import random
 
 import numpy as np
@@ -76,6 +89,8 @@ from .base import GenerationalSearch
 
 STATE_FORMAT = "gp-search-v1"
 SELECTIONS = ("roulette", "tournament")
+STOP_ON_SUCCESS = (False, True, "full-weight")
+PATIENCE_TOLERANCE = 0.01     # patience: a relative gain below 1 % over K generations is none
 
 
 def _is_int(x) -> bool:
@@ -99,8 +114,8 @@ class GPSearch(GenerationalSearch):
                  selection: str = "roulette", tournament_size: int = 7, elitism: int = 1,
                  init_depth: tuple[int, int] = (2, 6), max_depth: int = MAX_TREE_DEPTH,
                  max_size: int = 200, seed: int | None = None, reuse_costs: bool = True,
-                 stop_on_success: bool = False, fresh_scores: bool = False, polish: int = 0,
-                 task=None):
+                 stop_on_success: bool | str = False, fresh_scores: bool = False, polish: int = 0,
+                 patience: int = 0, phase_span: int = 0, task=None):
         super().__init__(family, task if task is not None else getattr(family, "task", None))
         self._configure(dict(population=population, generations=generations,
                              p_crossover=p_crossover, p_mutation=p_mutation,
@@ -110,8 +125,10 @@ class GPSearch(GenerationalSearch):
                              elitism=elitism, init_depth=init_depth, max_depth=max_depth,
                              max_size=max_size, seed=seed, reuse_costs=reuse_costs,
                              stop_on_success=stop_on_success, fresh_scores=fresh_scores,
-                             polish=polish))
+                             polish=polish, patience=patience, phase_span=phase_span))
         self.stopped = False                      # stop_on_success fired
+        self.converged = False                    # patience fired
+        self._final_trace: list[float] = []       # final-weights best after each full-weight generation
         self._rstate = random.Random(self.seed).getstate()
         self.generation = 0
         self.evaluations = 0
@@ -139,6 +156,8 @@ class GPSearch(GenerationalSearch):
         c.setdefault("stop_on_success", False)
         c.setdefault("fresh_scores", False)     # absent before robust runs kept a per-round best
         c.setdefault("polish", 0)               # absent before the final local search existed
+        c.setdefault("patience", 0)             # absent before the convergence stop existed
+        c.setdefault("phase_span", 0)
         c.setdefault("creep_sigma", 0.1)
         for k, v in (("islands", 1), ("migrate_every", 5), ("migrants", 2)):
             c.setdefault(k, v)
@@ -179,6 +198,13 @@ class GPSearch(GenerationalSearch):
                 "false", c["fresh_scores"])
         if not _is_int(c["polish"]) or not 0 <= c["polish"] < c["generations"]:
             bad("polish must be an integer in [0, generations)", c["polish"])
+        if not _is_int(c["patience"]) or not 0 <= c["patience"] <= 10**6:
+            bad("patience must be an integer >= 0 (0: run every generation)", c["patience"])
+        if not _is_int(c["phase_span"]) or not 0 <= c["phase_span"] <= c["generations"]:
+            bad("phase_span must be an integer in [0, generations] (0: all of them)",
+                c["phase_span"])
+        if not (isinstance(c["stop_on_success"], bool) or c["stop_on_success"] == "full-weight"):
+            bad(f"stop_on_success must be one of {STOP_ON_SUCCESS}", c["stop_on_success"])
         if not _is_int(c["seed"]):
             bad("seed must be an integer (randomness is explicit)", c["seed"])
         self.population_size, self.generations = int(c["population"]), int(c["generations"])
@@ -190,7 +216,10 @@ class GPSearch(GenerationalSearch):
         self.elitism, self.init_depth = int(c["elitism"]), (int(d[0]), int(d[1]))
         self.max_depth, self.max_size = int(c["max_depth"]), int(c["max_size"])
         self.seed, self.reuse_costs = int(c["seed"]), bool(c["reuse_costs"])
-        self.stop_on_success, self.polish = bool(c["stop_on_success"]), int(c["polish"])
+        sos = c["stop_on_success"]
+        self.stop_on_success = sos if isinstance(sos, str) else bool(sos)
+        self.polish, self.patience = int(c["polish"]), int(c["patience"])
+        self.phase_span = int(c["phase_span"])
         self._set_fresh_scores(c["fresh_scores"])
         self._cx, self._mut = make_tree_operators(self.family.pset, self.max_depth, self.max_size)
 
@@ -205,7 +234,9 @@ class GPSearch(GenerationalSearch):
                 "max_depth": self.max_depth, "max_size": self.max_size, "seed": self.seed,
                 "reuse_costs": self.reuse_costs, "stop_on_success": self.stop_on_success,
                 **({"fresh_scores": True} if self.fresh_scores else {}),   # absent: as before
-                **({"polish": self.polish} if self.polish else {})}
+                **({"polish": self.polish} if self.polish else {}),
+                **({"patience": self.patience} if self.patience else {}),
+                **({"phase_span": self.phase_span} if self.phase_span else {})}
 
     # -- randomness ----------------------------------------------------------
     @contextlib.contextmanager
@@ -225,6 +256,8 @@ class GPSearch(GenerationalSearch):
         the added generations run at the final weights.  A finished search
         kept its last population unbred: breed it as tell() would have."""
         self.schedule = schedule
+        if total > self.generations and self.converged:
+            self.converged, self._final_trace = False, []
         if total > self.generations and self.done and self.costs is not None:
             self.generations = total
             self.generation -= 1
@@ -232,6 +265,14 @@ class GPSearch(GenerationalSearch):
                 self._set_population(self._breed())
             self.generation += 1
         self.generations = max(self.generations, total)
+
+    def progress_of(self, generation: int) -> float:
+        n = self.phase_span or self.schedule or self.generations
+        return 1.0 if n == 1 else min(1.0, generation / (n - 1))
+
+    @property
+    def progress_span(self) -> int:
+        return max(1, (self.phase_span or self.schedule or self.generations) - 1)
 
     def _cache_phase(self, generation: int) -> tuple:
         return self.phase_of(generation) if self.reuse_costs else (float(generation),)
@@ -263,7 +304,7 @@ class GPSearch(GenerationalSearch):
     # -- ask / tell ------------------------------------------------------------
     @property
     def done(self) -> bool:
-        return self.stopped or self.generation >= self.generations
+        return self.stopped or self.converged or self.generation >= self.generations
 
     def _known(self) -> dict:
         same = self._parents_phase == self._cache_phase(self.generation)
@@ -297,10 +338,11 @@ class GPSearch(GenerationalSearch):
         self.evaluations += len(self._pending)
         self._record(len(self._pending), evaluation)
         self._stop_if_solved(evaluation, c)
+        self._stop_if_converged(evaluation)
         self._parents = {k: table[k] for k in self._keys}
         self._parents_phase = self._cache_phase(self.generation)
         self._pending = None
-        if not self.stopped and self.generation + 1 < self.generations:   # the last population stays
+        if not self.done and self.generation + 1 < self.generations:   # the last population stays
             with self._own_random():
                 self._set_population(self._breed())
         self.generation += 1
@@ -345,8 +387,10 @@ class GPSearch(GenerationalSearch):
         some genome solves the task ends the run; ``best`` becomes the cheapest
         solving genome of that generation."""
         task = self.task
-        if (not self.stop_on_success or task is None
-                or task.staged(self.progress) != task.staged(1.0)):
+        if not self.stop_on_success or task is None:
+            return
+        if (task.staged(self.progress) != task.staged(1.0) if self.stop_on_success is True
+                else self.phase_of(self.generation) != self.phase_at(1.0)):
             return
         ok = np.flatnonzero(np.asarray(evaluation.success, dtype=bool))
         if ok.size:
@@ -354,6 +398,27 @@ class GPSearch(GenerationalSearch):
             self._best_key, self.hof_cost = self._pending[i], float(costs[i])
             self.best_generation, self._best_phase = self.generation, self.judged_phase(self.generation)
             self.stopped = True
+
+    def _stop_if_converged(self, evaluation) -> None:
+        """``patience`` = K: in the final phase, stop once the final-weights best
+        (with this generation's evaluations) is within ``PATIENCE_TOLERANCE`` of
+        what it was K generations ago."""
+        if not self.patience or self.phase_of(self.generation) != self.phase_at(1.0):
+            return
+        ev = evaluation
+        c = ev.costs if self.task is None else (
+            self.task.cost(ev.measures, ev.failed, 1.0) if ev.measures else None)
+        now = math.inf if self.fresh_scores else self.final.cost   # fresh: this round's best
+        if c is not None and len(c):
+            c = np.where(np.isfinite(c), c, math.inf)
+            now = min(now, float(c.min()))
+        if not math.isfinite(now):
+            return                                  # nothing judged under the final weights yet
+        trace = self._final_trace
+        trace.append(now)
+        k = self.patience
+        if len(trace) > k and not trace[-1] < trace[-1 - k] * (1 - PATIENCE_TOLERANCE):
+            self.converged = True
 
     def _island_bounds(self) -> list[tuple[int, int]]:
         """[lo, hi) index range of every island in the flat population."""
@@ -472,6 +537,8 @@ class GPSearch(GenerationalSearch):
         return {
             "format": STATE_FORMAT, "pset": self.family.info.hash, "config": self.config(),
             "generation": self.generation, "evaluations": self.evaluations, "stopped": self.stopped,
+            **({"converged": True} if self.converged else {}),
+            **({"final_trace": list(self._final_trace)} if self._final_trace else {}),
             "random": python_random_state_to_json(self._rstate),
             "population": [dec_key(k) for k in self._keys],
             "costs": None if self.costs is None else self.costs.tolist(),
@@ -503,6 +570,8 @@ class GPSearch(GenerationalSearch):
         self._configure({**state["config"], "init_depth": tuple(state["config"]["init_depth"])})
         self.generation, self.evaluations = int(state["generation"]), int(state["evaluations"])
         self.stopped = bool(state.get("stopped", False))
+        self.converged = bool(state.get("converged", False))
+        self._final_trace = [float(x) for x in state.get("final_trace", [])]
         self._rstate = python_random_state_from_json(state["random"])
         self._set_population([trees(key(d)) for d in state["population"]])
         if state["costs"] is not None:
