@@ -157,158 +157,33 @@ def test_real_trajectory_of_a_standing_starman():
     assert abs(f.turns) < 0.05
 
 
-# -- benchmarks/auslander_2d.py: every run resumable -------------------------------------
-def _study():
-    import importlib.util
-    from pathlib import Path
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "auslander_2d.py"
-    spec = importlib.util.spec_from_file_location("auslander_2d", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    mod.CONFIGS["tiny"] = ("starman_travel", "bsr-time", {"seconds": 0.5}, {}, ("hop",), "tiny")
-    return mod
-
-
-def test_study_resumes_a_cut_run_to_the_uninterrupted_result(tmp_path, capsys, monkeypatch):
-    # run_one sets NUMBA_NUM_THREADS=1 unless set (for its own process); here it must keep
-    # numba's value, or every later compile in this process fails ("Cannot set
-    # NUMBA_NUM_THREADS to a different value once the threads have been launched")
-    import numba
-    monkeypatch.setenv("NUMBA_NUM_THREADS", str(numba.config.NUMBA_NUM_THREADS))
-    from gpmotion.run import run
-    from gpmotion.runconfig import RunConfig
-    study = _study()
-    whole = study.run_one("tiny", 3, 60, str(tmp_path / "a"))
-    # a study killed mid-run leaves a checkpointed run folder; the next call resumes it
-    cfg = RunConfig(task="starman_travel", family="bsr-time", seed=3, params={"seconds": 0.5},
-                    threads=1, search={"n_working": 10, "n_generations": 5, "reseed_every": 200})
-    run(cfg, tmp_path / "b" / "runs" / "tiny-seed3-60", quiet=True, artifacts=False,
-        max_generations=2)
-    cut = study.run_one("tiny", 3, 60, str(tmp_path / "b"))
-    assert cut["resumed"] and not whole["resumed"]
-    assert cut["genome"] == whole["genome"] and cut["cost"] == whole["cost"]
-    assert cut["evaluations"] == whole["evaluations"] == 60
-    # finished runs are read back, not rerun; the table names every cell's budget
-    study.run_one("tiny", 4, 40, str(tmp_path / "b"))
-    study.main(["--configs", "tiny", "--seeds", "2", "--first-seed", "3", "--budget", "60",
-                "--out", str(tmp_path / "b"), "--table-only"])
-    out = capsys.readouterr().out
-    assert "| tiny | 2 | 60 ×1, 40 ×1 |" in out
-
-
-def test_study_never_mixes_in_runs_of_other_settings(tmp_path, capsys):
-    study = _study()
-    study.run_one("tiny", 3, 20, str(tmp_path))
-    assert (("tiny", 3, 20) in study.load_results(tmp_path))
-    study.CONFIGS["tiny"] = ("starman_travel", "bsr-time", {"seconds": 0.5, "w_rotations": 1.0}, {},
-                             ("hop",), "tiny")
-    assert study.load_results(tmp_path) == {}          # the stored result is stale: skipped
-    assert "other settings" in capsys.readouterr().err
-    (tmp_path / "tiny-seed3-20.json").unlink()         # its run folder is refused, not resumed
-    with pytest.raises(SystemExit) as e:
-        study.main(["--configs", "tiny", "--seeds", "1", "--first-seed", "3", "--budget", "20",
-                    "--out", str(tmp_path)])
-    assert e.value.code == 2
-
-
-def test_a_study_file_adds_configurations_that_spawned_workers_run(tmp_path, capsys, monkeypatch):
-    """--study: one's own configurations from JSON (here a figure variant), run
-    by two spawned workers, which never see the parent's CONFIGS."""
-    import json
-    import sys
-    study = _study()
-    monkeypatch.setitem(sys.modules, "auslander_2d", study)     # what the workers unpickle by name
-    variant = tmp_path / "short_arms.toml"
-    variant.write_text('extends = "starman"\nname = "starman_short_arms"\n'
-                       '[[joints]]\nname = "arm_l"\nlimits = [-1.5, 0.3]\n')
-    study_file = tmp_path / "study.json"
-    study_file.write_text(json.dumps({"mine": ["starman_travel", "bsr-time",
-                                               {"seconds": 0.5, "figure": str(variant)}, {},
-                                               ["shuffle"], "my short-armed Star-Man"]}))
-    out = tmp_path / "out"
-    study.main(["--study", str(study_file), "--configs", "mine", "--seeds", "2", "--budget", "20",
-                   "--workers", "2", "--out", str(out)])
-    assert "| my short-armed Star-Man | 2 | 20 |" in capsys.readouterr().out
-    recs = [json.loads(p.read_text()) for p in sorted(out.glob("mine-seed*-20.json"))]
-    assert [r["seed"] for r in recs] == [0, 1] and all(r["params"]["figure"] == str(variant) for r in recs)
-
-
-@pytest.mark.parametrize("text, says", [
-    ("{not json", "cannot read"),
-    ('{"star-contact": ["starman_travel", "bsr-time", {}, {}, [], "x"]}', "built-in"),
-    ('{"a": ["no_such_task", "bsr-time", {}, {}, [], "x"]}', "unknown task"),
-    ('{"a": ["starman_travel", "gp", {}, {}, [], "x"]}', "BSR family"),
-    ('{"a": ["starman_travel", "bsr-time", {}, {}, ["moonwalk"], "x"]}', "gaits"),
-    ('{"a": ["starman_travel", "bsr-time", {}]}', "must be"),
-    ("[]", "JSON object"),
-])
-def test_a_bad_study_file_is_one_line_and_exit_2(tmp_path, capsys, text, says):
-    f = tmp_path / "study.json"
-    f.write_text(text)
-    with pytest.raises(SystemExit) as e:
-        _study().main(["--study", str(f), "--configs", "a", "--out", str(tmp_path / "o")])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert e.value.code == 2 and len(err) == 1 and says in err[0] and err[0].startswith("auslander_2d: ")
-
-
-def test_study_leaves_numba_threads_alone(tmp_path):
-    """run_one in a process with running numba threads must not change NUMBA_NUM_THREADS:
-    numba re-reads it before compiling, and every later compile in the process fails."""
-    import os
-    before = os.environ.get("NUMBA_NUM_THREADS")
-    _study().run_one("tiny", 5, 20, str(tmp_path))
-    assert os.environ.get("NUMBA_NUM_THREADS") == before
-
-
-def test_every_study_configuration_builds_its_task_and_ground():
-    """Each configuration's task, family options and figure variant are valid;
-    a ``two:`` variant is its figure on a ground where two points touch at most."""
+# -- the auslander-2d study (gpmotion/studies/auslander-2d/spec.toml) ----------------------
+def test_the_auslander_study_runs_the_tuned_configurations_on_the_reproduction_figures():
+    """Each configuration builds; all run on the reproduction figures (the damped
+    ground); the tuned settings are the documented ones; the cyclic gaits repeat
+    a 1 s script and the t_per = T versions differ from them in t_per only."""
     import gpmotion
-    from gpmotion.families import make_family
-    study = _study()
-    limited = set()
-    for name, (task_name, fam, params, options, _, _) in study.CONFIGS.items():
-        resolved = study._resolved(params)
-        task = gpmotion.get_task(task_name, **resolved)
-        make_family(fam, task, **options)
-        fig = params.get("figure", ":")
-        variant, base = fig.split(":") if ":" in fig else ("", fig)
-        shipped = gpmotion.load_figure(base or study.FIGURE_OF[task_name]).ground
-        want = gpmotion.make_scene(**{**shipped, **study.GROUND_VARIANTS.get(variant, {})})
-        scene = task.scene()
-        assert scene.max_contacts == want.max_contacts and scene.c_ground == want.c_ground, name
-        assert scene.mu == want.mu, name
-        limited |= {name} if scene.max_contacts == 2 else set()
-    assert {"star-contact-two", "beryl-periodic-two", "star-sense-contact-two"} <= limited
-    # every core configuration has its twin on the damped ground
-    for name in study.CORE:
-        for variant, c in study.DAMPINGS.items():
-            task_name, _, params, _, expected, _ = study.CONFIGS[f"{name}-{variant}"]
-            assert expected == study.CONFIGS[name][4]
-            assert gpmotion.get_task(task_name, **study._resolved(params)).scene().c_ground == c
-    # the headline set is the core set on the reproduction's figures, the default
-    assert study.HEADLINE == [f"{n}-auslander" for n in study.CORE]
-    for name in study.CORE:
-        task_name, fam, params, options, expected, _ = study.CONFIGS[f"{name}-auslander"]
-        core = study.CONFIGS[name]
-        assert (fam, expected) == (core[1], core[4])
-        assert params["figure"] == study.AUSLANDER_FIGURE[task_name]
-        assert gpmotion.get_task(task_name, **params).scene().c_ground == study.DAMPED_C
-        rest = {k: v for k, v in params.items() if k != "figure"}
-        extra_params, extra_options, label = study.AUSLANDER_TUNING.get(name, ({}, {}, core[5]))
-        assert rest == {**core[2], **extra_params}
-        assert options == {**core[3], **extra_options}
-        assert study.CONFIGS[f"{name}-auslander"][5].startswith(label)
-    assert study.CONFIGS["star-height-auslander"][2]["w_max_height"] == 0.5
-    assert study.CONFIGS["star-rotations-auslander"][2]["w_rotations"] == 4.0
-    # the cyclic gaits repeat a 1 s script; the cartwheel and the tumble do not repeat
+    from gpmotion.study import SHIPPED
+    from gpmotion.study.driver import check
+    from gpmotion.study.spec import load
+    spec = load(SHIPPED / "auslander-2d" / "spec.toml")
+    check(spec)                                        # every task, family and search builds
+    conf = {n: c.stages[0] for n, c in spec.configurations.items()}
+    figure = {"starman_travel": "starman_auslander", "beryl_travel": "beryl_auslander"}
+    for name, st in conf.items():
+        assert st.params["figure"] == figure[st.task], name
+        assert gpmotion.get_task(st.task, **st.params).scene().c_ground == 200.0
+        assert st.search == {"n_working": 10, "n_generations": 3999, "reseed_every": 200}
+    assert conf["star-rotations"].params["w_rotations"] == 4.0
+    assert conf["star-height"].params["w_max_height"] == 0.5
     for name, t_per in (("star-contact", 1.0), ("star-height", 1.0), ("star-rotations", None),
                         ("beryl-tumble", None), ("beryl-periodic", 0.5)):
-        assert study.CONFIGS[f"{name}-auslander"][3].get("t_per") == t_per
-    # the t_per = T versions stay, differing from the headline in t_per only
+        assert conf[name].options.get("t_per") == t_per, name
     for name in ("star-contact", "star-height"):
-        head, aperiodic = study.CONFIGS[f"{name}-auslander"], study.CONFIGS[f"{name}-auslander-aperiodic"]
-        assert head[2] == aperiodic[2] and aperiodic[3] == {} and head[4] == aperiodic[4]
+        head, aperiodic = conf[name], conf[f"{name}-aperiodic"]
+        assert head.params == aperiodic.params and aperiodic.options == {}
+        assert spec.configurations[name].expect == spec.configurations[f"{name}-aperiodic"].expect
+    assert set(spec.tune_seeds).isdisjoint(spec.report_seeds)
 
 
 def test_the_reproduction_figures_differ_from_theirs_only_as_documented():
