@@ -1,5 +1,7 @@
 """Controller families side by side on one task, one actuation and one
-evaluation budget.
+evaluation budget — a study (:mod:`gpmotion.study`) of one configuration per
+family, so its searches run through the run loop and its results are a
+ledger (``OUT/results.jsonl``); the same command resumes a cut comparison.
 
 Each family runs K seeds (its search's settings for the budget are the
 family's ``budget_settings``); every run gets the same evaluation budget (a
@@ -18,24 +20,22 @@ scene, so the curves start there (the figure says so).
 Written to the output folder: compare.md / compare.csv (the table),
 runs.json (every run, with its curves), curves.csv (the plotted medians and
 quartiles), curves.png, and best/FAMILY-seedK.json, each run's best
-controller as a ``best.json``-style file (``gpmotion replay`` reads it).
+controller as a ``best.json``-style file (``gpmotion replay`` reads it); the
+study's own files: study.json, results.jsonl, controllers/, runs/.
 """
 from __future__ import annotations
 
 import csv
 import io
 import sys
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .evaluators import make_evaluator
 from .families import make_family
 from .plugins import loaded as loaded_plugins
-from .records import atomic_write_json, atomic_write_text, envelope
-from .replay import replay_genome
+from .records import atomic_write_json, atomic_write_text, envelope, read_json
 from .task import get_task, task_id
 
 
@@ -43,42 +43,49 @@ def _nan(x):
     return float("nan") if x is None else float(x)
 
 
-def run_one(task, family_name, seed, budget, actuation, population=None, workers=0,
-            scheduler=None, family_options=None):
-    """One search; returns a dict with the curve and the final numbers.
-    ``population``: for families whose search has one (None: the family's default)."""
-    fam = make_family(family_name, task, **(family_options or {}).get(family_name, {}))
-    search = fam.make_search(seed, **fam.budget_settings(
-        budget, population if fam.takes_population else None))
-    ev = make_evaluator(task, fam, workers=workers, scheduler=scheduler, actuation=actuation)
-    evals, curve, current, progress, first_success = 0, [], [], [], None
-    t0 = time.perf_counter()
-    try:
-        while not search.done and evals < budget:
-            genomes = search.ask()
-            p = search.progress
-            result = ev.evaluate(genomes, p)
-            search.tell(result)
-            evals += len(genomes)
-            curve.append((evals, search.best_final))        # final scoring (None: unknown)
-            current.append((evals, search.best_so_far))
-            progress.append((evals, p))
-            if first_success is None and result.success.any():
-                first_success = evals
-    finally:
-        ev.close()
-    wall = time.perf_counter() - t0
-    traj, costs, measures, ok = replay_genome(task, fam, actuation, search.best)
-    controller = envelope("best", {
-        "task": task.id, "params": dict(task.params), "family": fam.name,
-        "options": dict(fam.options), "actuation": actuation, "plugins": loaded_plugins(),
-        "genome": fam.to_json(search.best), "cost": float(costs[0]), "seed": seed,
-        "terms": task.breakdown(measures, 0, 1.0), "final_cost": float(costs[0]),
-        "success": bool(ok[0]), "facts": task.describe(traj, measures)})
-    return {"family": family_name, "seed": seed, "evaluations": evals, "final_cost": float(costs[0]),
-            "success": bool(ok[0]), "first_success": first_success, "wall_s": wall,
-            "curve": curve, "curve_current": current, "progress": progress,
-            "controller": controller}
+def comparison_spec(task, controllers, seeds, budget, actuation, params, population,
+                    family_options) -> dict:
+    """The study of a comparison: one configuration per family, seeds 0..K-1
+    (report seeds: nothing was chosen on them), the family's settings for the budget."""
+    configs = {}
+    for name in controllers:
+        options = dict((family_options or {}).get(name, {}))
+        fam = make_family(name, task, **options)
+        settings = fam.budget_settings(budget, population if fam.takes_population else None)
+        configs[name] = {"task": task.name, "family": name, "params": dict(params or {}),
+                         "options": options, "actuation": actuation, "judge": "task",
+                         "search": {k: v.item() if hasattr(v, "item") else v
+                                    for k, v in settings.items() if v is not None},
+                         "label": name}
+    return {"study": {"name": "compare", "title": f"{task.name}: {' vs '.join(controllers)}, "
+                      f"{budget:,} evaluations per run ({actuation})",
+                      "report_seeds": list(range(seeds))},
+            "configurations": configs}
+
+
+def _log_curves(run_dir: Path) -> dict:
+    """A run's curves from its log.csv: best so far under the final weights
+    (None where unknown), under the generation's weights, progress; and the
+    evaluations when the first solver appeared."""
+    rows = list(csv.DictReader(io.StringIO((run_dir / "log.csv").read_text())))
+    curve, current, progress, first = [], [], [], None
+    for r in rows:
+        e = int(r["evaluations"])
+        curve.append((e, float(r["best_final"]) if r.get("best_final") not in (None, "") else None))
+        current.append((e, float(r["best_so_far"])))
+        progress.append((e, float(r["progress"])))
+        if first is None and int(r.get("solved") or 0) > 0:
+            first = e
+    return {"curve": curve, "curve_current": current, "progress": progress,
+            "first_success": first}
+
+
+def _run_record(out: Path, row: dict) -> dict:
+    """runs.json's record of one ledger row (the run's full curves from its log)."""
+    run = {"family": row["config"], "seed": row["seed"], "evaluations": row["evaluations"],
+           "final_cost": row["cost"], "success": bool(row["success"]), "wall_s": row["wall_s"],
+           **_log_curves(out / "runs" / f"{row['config']}-seed{row['seed']}")}
+    return run
 
 
 def summarize(runs: list[dict]) -> list[dict]:
@@ -197,14 +204,26 @@ def plot_curves(path, series, task, window, window_evals, actuation):
     _save_png(fig, path, 120)
 
 
-def check_out_dir(out, force: bool) -> Path:
-    """The output folder; an existing non-empty one only with ``force``."""
+def check_out_dir(out, force: bool, digest: str | None = None) -> Path:
+    """The output folder: new, empty, or this comparison's (resumed); another
+    comparison's or anything else only with ``force``, which moves it aside."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out}: exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise ValueError(f"--out {out}: folder exists and is not empty; "
-                         "use --force to overwrite it")
+    if out.is_dir() and any(out.iterdir()):
+        same = False
+        if digest is not None and (out / "study.json").is_file():
+            from .study.ledger import read_study
+            try:
+                same = read_study(out)["digest"] == digest
+            except ValueError:
+                same = False
+        if force:
+            from .rundir import RunDir
+            RunDir._move_aside(out)
+        elif not same:
+            raise ValueError(f"--out {out}: folder exists and is not empty (not this "
+                             "comparison); use --force to move it aside")
     out.mkdir(parents=True, exist_ok=True)
     return out
 
@@ -225,35 +244,41 @@ def aggregate_lines(runs) -> list[str]:
 def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", params=None,
             population=None, workers=0, scheduler=None, family_options=None, quiet=False,
             force=False):
+    """Run (or resume) the comparison into ``out``; returns (table rows, compare.md)."""
+    from .study.driver import run_study
+    from .study.spec import parse
     task = get_task(task_name, **(params or {}))
-    out = check_out_dir(out, force)
+    spec = parse(comparison_spec(task, controllers, seeds, budget, actuation, params,
+                                 population, family_options))
+    out = check_out_dir(out, force, spec.digest())
+    rows = run_study(spec, out, spec.report_seeds, workers=max(1, workers or 0),
+                     scheduler=scheduler, quiet=quiet)
     (out / "best").mkdir(exist_ok=True)
+    order = {name: i for i, name in enumerate(controllers)}
+    rows = sorted(rows, key=lambda r: (order[r["config"]], r["seed"]))
     runs = []
-    for fam in controllers:
-        for seed in range(seeds):
-            r = run_one(task, fam, seed, budget, actuation, population, workers, scheduler,
-                        family_options)
-            runs.append(r)
-            atomic_write_json(out / "best" / f"{fam}-seed{seed}.json", r.pop("controller"))
-            if not quiet:
-                print(f"{fam:<10} seed {seed}: cost {r['final_cost']:.3f} "
-                      f"{'solved' if r['success'] else 'not solved'} in {r['wall_s']:.1f}s",
-                      file=sys.stderr, flush=True)
+    for r in rows:
+        runs.append(_run_record(out, r))
+        rec = read_json(out / r["controller"], kind="best")
+        rec = {k: v for k, v in rec.items() if k not in ("format", "version")}
+        rec.update(cost=r["cost"], plugins=loaded_plugins())
+        atomic_write_json(out / "best" / f"{r['config']}-seed{r['seed']}.json",
+                          envelope("best", rec))
     if not quiet and seeds > 1:
         print("\n".join(aggregate_lines(runs)), file=sys.stderr, flush=True)
-    rows = summarize(runs)
+    table = summarize(runs)
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(table[0]), lineterminator="\n")
     w.writeheader()
-    w.writerows(rows)
+    w.writerows(table)
     atomic_write_text(out / "compare.csv", buf.getvalue())
     md = (f"{task.name}, actuation {actuation}, {budget:,} evaluations per run, {seeds} seeds; "
-          f"cost re-scored at full style weight (lower is better)\n\n" + table_markdown(rows))
+          f"cost re-scored at full style weight (lower is better)\n\n" + table_markdown(table))
     atomic_write_text(out / "compare.md", md)
-    atomic_write_json(out / "runs.json", {"task": task.id, "params": task.params, "actuation": actuation,
-                                          "budget": budget, "runs": runs})
+    atomic_write_json(out / "runs.json", {"task": task.id, "params": task.params,
+                                          "actuation": actuation, "budget": budget, "runs": runs})
     write_curves(out, task, runs, budget, actuation)
-    return rows, md
+    return table, md
 
 
 def write_curves(out, task, runs, budget, actuation):

@@ -10,6 +10,8 @@ def cmd_compare(args):
     from ..names import unknown
     from ..records import validate_number
     ctrls = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    if not ctrls:
+        raise ValueError("--controllers: give at least one controller family (gpmotion list controllers)")
     for c in ctrls:
         if c not in family_names():
             raise ValueError(f"--controllers: {unknown('controller', c, family_names())}")
@@ -29,4 +31,5 @@ def cmd_compare(args):
                     workers=args.workers, scheduler=args.scheduler, quiet=args.quiet,
                     force=args.force)
     print(md)
-    print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png")
+    print(f"wrote {out}/compare.md, compare.csv, runs.json, curves.png (the ledger: results.jsonl; "
+          "the same command resumes a cut comparison)")
