@@ -147,3 +147,12 @@ def test_sigkill_at_any_moment_then_rerun_gives_the_uninterrupted_rows(tmp_path)
     assert main(["study", "run", str(s), "--out", str(killed), "--quiet"]) == 0
     assert untimed(read_rows(killed)) == untimed(read_rows(ref))
     assert controllers(killed) == controllers(ref)
+
+
+def test_two_workers_give_the_serial_rows(tmp_path):
+    s = spec(tmp_path)
+    assert main(["study", "run", str(s), "--out", str(tmp_path / "serial"), "--quiet"]) == 0
+    assert main(["study", "run", str(s), "--out", str(tmp_path / "pool"), "--quiet",
+                 "--workers", "2"]) == 0
+    assert untimed(read_rows(tmp_path / "pool")) == untimed(read_rows(tmp_path / "serial"))
+    assert controllers(tmp_path / "pool") == controllers(tmp_path / "serial")
