@@ -179,7 +179,7 @@ def main(argv=None) -> int:
         if _evaluator_lost(e) and "resume" not in msg:
             msg += " (the checkpoint is intact: `gpmotion resume RUN_DIR` continues)"
         print(f"gpmotion: error: {msg}", file=sys.stderr)
-        return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (README)
+        return getattr(e, "exit_code", 2)     # 3: the Dask scheduler was lost (docs/howto/dask.md)
 
 
 def _evaluator_lost(e: BaseException) -> bool:

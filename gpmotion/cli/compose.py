@@ -17,7 +17,7 @@ HELP = "chain saved controllers; search their switch times with a composite-moti
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("script", help="composite-motion script (Table 4 language; see the README)")
+    p.add_argument("script", help="composite-motion script (Table 4 language; docs/howto/composite.md)")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--controllers", nargs="+", metavar="CTRL",
                      help="saved controllers (best.json or run directories), one per script phase")
