@@ -67,7 +67,11 @@ def plot(spec, rows: list[dict], path, seed_set: str = "report", judge: str | No
     bx.set_xlabel("evaluations")
     bx.set_ylabel("best cost so far, final weights (median, quartiles)")
     bx.grid(alpha=0.3)
-    bx.legend(fontsize=6)
+    if bx.lines:
+        bx.legend(fontsize=6)
+    else:                         # rows imported from records that kept no log
+        bx.text(0.5, 0.5, "no learning curves in these rows", ha="center", va="center",
+                transform=bx.transAxes, fontsize=9, color="0.4")
     fig.suptitle(f"{spec.title} — {seed_set} seeds", fontsize=9)
     fig.set_layout_engine("constrained")
     _save_png(fig, path, 110)
