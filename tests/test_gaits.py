@@ -198,3 +198,77 @@ def test_the_reproduction_figures_differ_from_theirs_only_as_documented():
     head = gpmotion.load_figure("starman").contact_names.index("head")
     assert star.model.cp_pos[head].tolist() == [0.5, 0.0]
     assert gpmotion.load_figure("starman").model.cp_pos[head].tolist() == [0.3, 0.0]
+
+
+# -- strict definitions: posture, which limbs carry the weight, landings -----------------
+def strict(t, force, pitch, x, z, angles):
+    m = gaits.strict_measures(t, force, STAR, pitch, x, z, angles)
+    return gaits.classify_strict(m), m
+
+
+def test_a_shuffle_on_a_hand_and_a_foot_is_loose_shuffle_but_strictly_other():
+    t = frames()
+    down = lambda i: ("foot_l",) if (i // 7) % 2 else ("foot_r", "hand_r")   # noqa: E731
+    args = (t, forces(t, down), np.pi / 2 + 0.05 * np.sin(t * 3.7 + t ** 2), t / 2,
+            0.4 + 0.01 * t, aperiodic_angles(t))
+    assert gaits.classify(feat(*args)) == "shuffle"
+    label, m = strict(*args)
+    assert m["hands_share"] == pytest.approx(1 / 3, abs=0.05) and label == "other"
+    feet_only = forces(t, lambda i: ("foot_l",) if (i // 7) % 2 else ("foot_r",))
+    assert strict(t, feet_only, *args[2:])[0] == "shuffle"
+
+
+def test_a_shuffle_lying_pitched_over_is_strictly_other():
+    t = frames()
+    down = lambda i: ("foot_l",) if (i // 7) % 2 else ("foot_r",)   # noqa: E731
+    label, m = strict(t, forces(t, down), np.pi / 2 - np.radians(80) + 0 * t, t / 2,
+                      0.4 + 0 * t, aperiodic_angles(t))
+    assert m["upright"] == 0.0 and m["max_tilt_deg"] == pytest.approx(80)
+    assert label == "other"
+    # sunk to a fifth of the standing height: not upright either
+    z = np.where(t < 0.2, 0.4, 0.08)
+    assert strict(t, forces(t, down), np.pi / 2 + 0 * t, t / 2, z, aperiodic_angles(t))[0] == "other"
+
+
+def test_a_hop_lands_on_the_feet():
+    t = frames()
+    flying = {*range(30, 40), *range(80, 90)}
+    on_feet = lambda i: () if i in flying else ("foot_l", "foot_r")   # noqa: E731
+    args = (np.pi / 2 + 0 * t, t / 2, 0.4 + 0 * t, aperiodic_angles(t))
+    label, m = strict(t, forces(t, on_feet), *args)
+    assert (m["landings"], m["landed_on_feet"], label) == (2, 2, "hop")
+    on_hands = lambda i: () if i in flying else ("hand_l",) if i in (40, 90) else ("foot_l",)  # noqa: E731
+    label, m = strict(t, forces(t, on_hands), *args)
+    assert (m["landings"], m["landed_on_feet"], label) == (2, 0, "other")
+    assert gaits.classify(feat(t, forces(t, on_hands), *args)) == "hop"
+
+
+def test_three_quarters_of_a_turn_is_no_hop():
+    t = frames()
+    flying = {*range(30, 40), *range(80, 90)}
+    down = lambda i: () if i in flying else ("foot_l",)   # noqa: E731
+    pitch = np.pi / 2 - 2 * np.pi * 0.75 * t / t[-1]
+    assert gaits.classify(feat(t, forces(t, down), pitch, t / 2, 0.4 + 0 * t, aperiodic_angles(t))) == "hop"
+    assert strict(t, forces(t, down), pitch, t / 2, 0.4 + 0 * t, aperiodic_angles(t))[0] == "other"
+
+
+def test_a_cartwheel_turns_on_hands_and_feet_not_over_the_head():
+    t = frames()
+    pitch = np.pi / 2 - 2 * np.pi * 1.2 * t / t[-1]
+    args = (pitch, 2.0 * t / t[-1], 0.4 + 0 * t, aperiodic_angles(t))
+    assert strict(t, forces(t, cartwheel_support), *args)[0] == "cartwheel"
+    over_head = lambda i: ("head", "hand_l") if (i // 20) % 2 else ("foot_l",)   # noqa: E731
+    label, m = strict(t, forces(t, over_head), *args)
+    assert m["other_share"] > 0.3 and label == "tumble"
+    airborne = lambda i: () if i % 10 < 6 else cartwheel_support(i)   # noqa: E731
+    assert strict(t, forces(t, airborne), *args)[0] == "tumble"
+
+
+def test_judge_keeps_measures_that_name_either_label():
+    from gpmotion import load_figure, simulate
+    traj = simulate(load_figure("starman"), 0.5)
+    label, m = gaits.judge(traj)
+    assert label == "other" and gaits.relabel(m, "loose") == gaits.gait_of(traj)[0]
+    assert m["upright"] == 1.0 and m["feet_share"] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="definition"):
+        gaits.judge(traj, definition="lenient")
