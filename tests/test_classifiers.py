@@ -113,3 +113,23 @@ def test_every_label_is_named_again_from_kept_measures():
 
 if __name__ == "__main__":
     print(report())
+
+
+def test_the_study_engine_keeps_the_strict_measures_and_judges_by_them():
+    """A study row keeps every strict measure (gpmotion.study.judge.single_measures),
+    and the 'gait-strict' judge names the label the strict classifier names."""
+    from gpmotion.families import make_family
+    from gpmotion.replay import replay_genome
+    from gpmotion.study.judge import get_judge, single_measures
+    from gpmotion.task import get_task
+    judge = get_judge("gait-strict")
+    for r in judged():
+        kept = {f"gait_{k}": v for k, v in r["measures"].items()}
+        assert judge.decide(kept, ["cartwheel"]) == (r["strict"] == "cartwheel", r["strict"])
+    m = load_set()["motions"][0]
+    task = get_task(m["task"], **m["params"])
+    fam = make_family(m["family"], task, **m["options"])
+    traj, _, measures, ok = replay_genome(task, fam, fam.default_actuation, fam.from_json(m["genome"]))
+    kept = single_measures(task, traj, measures, ok)
+    assert set(judge.needs) <= set(kept)
+    assert judge.decide(kept, [])[1] == judged()[0]["strict"]

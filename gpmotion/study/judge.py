@@ -77,8 +77,8 @@ def single_measures(task, traj, measures: dict, ok) -> dict:
     fig = traj.figure
     if fig.dimensions == 2 and any(n.startswith("foot") for n in fig.contact_names):
         from .. import gaits
-        f = gaits.trajectory_features(traj)
-        kept.update({f"gait_{k}": v for k, v in f.__dict__.items()})
+        _, m = gaits.judge(traj)            # the strict measures hold the loose features too
+        kept.update({f"gait_{k}": v for k, v in m.items()})
     return kept
 
 
@@ -114,6 +114,23 @@ register_judge(Judge(
     "gait", "the planar gait classifier (gpmotion.gaits); success: an expected gait",
     ("cartwheel", "tumble", "hop", "periodic shuffle", "shuffle", "other"),
     _gait_decide, needs=_GAIT_KEYS))
+
+
+def _strict_gait_decide(kept: dict, expect: list):
+    from ..gaits import relabel
+    label = relabel({k[5:]: v for k, v in kept.items() if k.startswith("gait_")}, "strict")
+    return (label in expect) if expect else None, label
+
+
+_STRICT_GAIT_KEYS = _GAIT_KEYS + tuple(f"gait_{k}" for k in (
+    "standing_height", "upright", "min_height", "max_tilt_deg", "feet_share", "hands_share",
+    "other_share", "hands_down", "landings", "landed_on_feet"))
+
+register_judge(Judge(
+    "gait-strict", "the planar gait classifier's strict definitions (posture, which limbs carry "
+    "the weight, landings on the feet: gpmotion.gaits); success: an expected gait",
+    ("cartwheel", "tumble", "hop", "periodic shuffle", "shuffle", "other"),
+    _strict_gait_decide, needs=_STRICT_GAIT_KEYS))
 
 
 # Rex's walk → turn → walk: every stage judged on its own frames of the composite
