@@ -128,11 +128,14 @@ def parser() -> argparse.ArgumentParser:
                         "each family's; needs such a family in --controllers)")
     p.add_argument("--param", action="append", metavar="KEY=VALUE",
                    help="task parameter (gpmotion show TASK)")
-    p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="searches run at once in spawned processes (default: one, in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
-    p.add_argument("--out", help="output folder (default runs/compare-TASK)")
+    p.add_argument("--out", help="output folder (default runs/compare-TASK; the same command "
+                   "resumes a cut comparison)")
     _add_plugins_arg(p)
-    p.add_argument("--force", action="store_true", help="overwrite a non-empty --out folder")
+    p.add_argument("--force", action="store_true",
+                   help="move a non-empty --out folder (of another comparison) aside")
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
     p = sub.add_parser("export", help="write a controller's motion as BVH (Blender, MotionBuilder)")
     p.add_argument("source", help="run directory or controller JSON (best.json)")
