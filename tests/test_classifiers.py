@@ -133,3 +133,23 @@ def test_the_study_engine_keeps_the_strict_measures_and_judges_by_them():
     kept = single_measures(task, traj, measures, ok)
     assert set(judge.needs) <= set(kept)
     assert judge.decide(kept, [])[1] == judged()[0]["strict"]
+
+
+@pytest.mark.parametrize("path, label, steps", [
+    ("bob_walk_v1_waddle.json", "fallen", 0),        # tips past the fall test in its last frames
+    ("bob_walk_v2_limp.json", "other", 1),           # 0.8 m, one step with the feet taking turns
+    ("rex_walk_v1_lunge.json", "other", 1),          # 1.07 m by a lunge, one alternating step
+    ("rex_turn_v3/walk.json", "turn", 3),            # 2.3 m, 3 steps, but the heading swings 48°
+    ("rex_turn_v3/turn.json", "turn", 1),            # 101° of heading change
+])
+def test_3d_labels_of_the_saved_creature_controllers(path, label, steps):
+    """gpmotion.gaits3d on the saved Bob and Rex controllers (not eye-validated:
+    these pin the strict 3-D definitions' answers; docs/reproduction/classifiers.md)."""
+    from gpmotion import gaits3d
+    from gpmotion.replay import load_controller, replay_genome
+    task, fam, act, genome, _ = load_controller(DATA.parent / path)
+    traj, _, measures, _ = replay_genome(task, fam, act, genome)
+    got, m = gaits3d.judge(traj, task)
+    assert (got, m["steps"]) == (label, steps)
+    assert m["steps"] <= measures["steps"][0]       # alternating, forward-facing: never more
+    assert gaits3d.relabel(json.loads(json.dumps(m))) == got
