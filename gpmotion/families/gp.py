@@ -43,7 +43,11 @@ PI_GAIN, PI_BOUND = 5.0, 0.5
 def _primitives(flag, text):
     from ..gp import primitives
     primitives.load_builtin()
-    names = [n.strip() for n in text.split(",") if n.strip()]
+    names = [n.strip() for n in text.split(",")]
+    if not any(names):
+        raise ValueError(f"{flag}: give a comma list of primitive names (gpmotion list primitives)")
+    if not all(names):
+        raise ValueError(f"{flag}: an empty name in {text!r} (a stray comma?)")
     if not names:
         raise ValueError(f"{flag}: give a comma list of primitive names (gpmotion list primitives)")
     if len(set(names)) != len(names):
@@ -319,6 +323,11 @@ class GPFamily(Family):
             # a task's polish is a share of its generations: --generations N keeps the share
             share = defaults["polish"] / defaults["generations"]
             opts["polish"] = min(round(share * opts["generations"]), max(0, opts["generations"] - 1))
+        if "generations" in opts and defaults.get("phase_span"):
+            # --generations N runs N generations, the phases over all of them, as before a
+            # task's stop criterion (its phase_span and patience) existed
+            opts.setdefault("phase_span", 0)
+            opts.setdefault("patience", 0)
         if "migrants" not in opts:
             pop = opts.get("population", self.search_defaults(self.task)["population"])
             islands = opts.get("islands", 1)
