@@ -23,9 +23,11 @@ penalty before saving.  :func:`read_json` likewise rejects ``NaN``/
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import os
+import stat
 import random
 import secrets
 from pathlib import Path
@@ -92,10 +94,23 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
     _fsync_dir(path.parent)
 
 
+# A RunDir (gpmotion.rundir) writes through /proc/self/fd/N, its directory's
+# descriptor, which means nothing to a reader: it records here the path the
+# user gave, so every message shows that path.
+_DISPLAY: dict[str, Path] = {}       # "/proc/self/fd/N" -> the path the user gave
+
+
+def display_path(path: str | os.PathLike) -> Path:
+    """``path`` with a RunDir's /proc/self/fd/N prefix shown as the run directory."""
+    s = str(path)
+    for prefix, real in _DISPLAY.items():
+        if s == prefix or s.startswith(prefix + "/"):
+            return Path(str(real) + s[len(prefix):])
+    return Path(s)
+
+
 def _shown(path: Path) -> Path:
-    """A path as the user knows it: RunDir writes through /proc/self/fd/N
-    (its directory's descriptor), which means nothing to a reader."""
-    from .rundir import display_path
+    """A path as the user knows it (see :func:`display_path`)."""
     return display_path(path)
 
 
@@ -220,23 +235,72 @@ def _short(value: Any) -> str:
     return r if len(r) <= 60 else r[:57] + "..."
 
 
+def read_regular(path: str | os.PathLike, max_bytes: int = DEFAULT_MAX_BYTES, *,
+                 dir_fd: int | None = None, follow: bool = True,
+                 shown: str | os.PathLike | None = None) -> bytes:
+    """The bytes of a regular file, never blocking and never unbounded.
+
+    The open is non-blocking (a FIFO in place of the file opens at once and is
+    refused, it never waits for a writer), ``fstat`` decides (a directory, a
+    FIFO, a device: refused), and at most ``max_bytes`` are read (``+1`` to
+    detect more).  ``dir_fd``: ``path`` is a name inside that open directory;
+    ``follow=False``: a symbolic link is refused, not followed.  Every problem
+    is one :class:`FormatError` line naming ``shown`` (default ``path``).
+    """
+    shown = display_path(shown if shown is not None else path)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+    if not follow:
+        flags |= getattr(os, "O_NOFOLLOW", 0)
+    try:
+        fd = os.open(path, flags, dir_fd=dir_fd)
+    except OSError as e:
+        if e.errno == errno.ELOOP and not follow:
+            raise FormatError(f"{shown}: a symbolic link (not followed)") from None
+        raise FormatError(f"{shown}: cannot read ({e.strerror or e})") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):
+            raise FormatError(f"{shown}: cannot read (a directory, not a file)")
+        if not stat.S_ISREG(mode):
+            raise FormatError(f"{shown}: cannot read (not a regular file: a FIFO, socket or device)")
+        chunks, left = [], max_bytes + 1
+        while left > 0:
+            chunk = os.read(fd, min(left, 1 << 20))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            left -= len(chunk)
+    except OSError as e:
+        raise FormatError(f"{shown}: cannot read ({e.strerror or e})") from None
+    finally:
+        os.close(fd)
+    data = b"".join(chunks)
+    if len(data) > max_bytes:
+        raise FormatError(f"{shown}: larger than the {max_bytes}-byte limit")
+    return data
+
+
+def read_text(path: str | os.PathLike, max_bytes: int = DEFAULT_MAX_BYTES, **kw) -> str:
+    """:func:`read_regular` decoded as UTF-8 (anything else: one FormatError line)."""
+    data = read_regular(path, max_bytes, **kw)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        shown = display_path(kw.get("shown") or path)
+        raise FormatError(f"{shown}: not UTF-8 text (byte {e.start})") from None
+
+
 def read_json(path: str | os.PathLike, *, kind: str,
               max_bytes: int = DEFAULT_MAX_BYTES) -> dict:
     """Load a ``gpmotion-<kind>`` v1 JSON file, refusing anything else.
 
     Reads at most ``max_bytes`` (+1 to detect overflow), so a huge or endless
-    file (``/dev/zero``) cannot exhaust memory.  Unreadable files are a
-    FormatError too, so a CLI can print one line and exit 2.
+    file (``/dev/zero``) cannot exhaust memory, and only a regular file (a
+    FIFO is refused, never waited on).  Unreadable files are a FormatError
+    too, so a CLI can print one line and exit 2.
     """
     path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            data = f.read(max_bytes + 1)
-    except OSError as e:
-        raise FormatError(f"{path}: cannot read ({e.strerror or e})") from None
-    if len(data) > max_bytes:
-        raise FormatError(f"{path}: larger than the {max_bytes}-byte limit")
-    return parse_json(data, kind=kind, source=str(path))
+    return parse_json(read_regular(path, max_bytes), kind=kind, source=str(display_path(path)))
 
 
 # ---------------------------------------------------------- config checking
@@ -382,11 +446,3 @@ def numpy_rng_from_json(d: Any) -> np.random.Generator:
         raise FormatError(f"numpy rng state: rejected by numpy ({e})") from None
     return np.random.Generator(bitgen)
 
-
-# -------------------------------------------------------------- run folder
-
-def __getattr__(name):          # RunDir lives in gpmotion.rundir (imports this module)
-    if name == "RunDir":
-        from .rundir import RunDir
-        return RunDir
-    raise AttributeError(name)

@@ -245,7 +245,12 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                                                            given.threads)
             if "workers" in backend or "scheduler" in backend:
                 cfg.workers, cfg.scheduler = backend.pop("workers", 0), backend.pop("scheduler", None)
-            rec = _restore(rd, doc, search)                     # checked before extending
+            if extend_generations is not None:
+                validate_number("--extend-generations", extend_generations, lo=1,
+                                hi=10_000_000, integer=True)
+            rec = _restore(rd, doc, search)          # everything checked, nothing changed
+            evaluator = _evaluator(cfg, task, family, actuation, backend)
+            rd.trim_log(rec.trim)                    # now the changes
             if extend_generations is not None:
                 doc = _record_extension(rd, doc, search.schedule, extend_generations)
                 search.extend(doc["extended_generations"], search.schedule)
@@ -359,8 +364,9 @@ def _record_extension(rd: RunDir, doc: dict, configured: int, extra: int) -> dic
 
 
 def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
-    """Bring the search to the checkpoint (checked against this run) and the
-    log to the checkpoint's rows; none yet: an empty log."""
+    """Bring the search to the checkpoint (checked against this run) and check the
+    log's first rows end at it; none yet: the run starts again.  Changes no file:
+    the caller trims the log (``rec.trim``) once everything is checked."""
     ident = _identity(_checked_identity(doc, rd))
     original = search.total
     total = doc.get("extended_generations")
@@ -368,9 +374,15 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
         total = int(validate_number("extended_generations", total, lo=original, integer=True,
                                     hi=10**9))
     if not rd.has_checkpoint():
-        rd.trim_log(0)
+        if rd.exists(RunDir.BEST):          # finished: never silently started again
+            raise FormatError(f"{rd.checkpoint_path}: missing, but the run finished (best.json); "
+                              "refusing to start it again — `gpmotion run --force` starts a "
+                              "new run and moves this one aside")
+        rd.read_log()                       # readable (a regular file), not yet trimmed
         search.extend(total or original, original)
-        return _Recorder(rd, ident, 0, 0, CHECKPOINT_EVERY_S)
+        rec = _Recorder(rd, ident, 0, 0, CHECKPOINT_EVERY_S)
+        rec.trim = 0
+        return rec
     ck = rd.load_checkpoint()
     where = str(rd.checkpoint_path)
     for k in ("run_id", "config_digest"):
@@ -396,15 +408,17 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
         raise FormatError(f"{where}: not a valid checkpoint ({e!r:.200})") from None
     _check_state(search, evals, where)
     search.extend(total or original, original)
-    rd.trim_log(n_rows)
-    rows = rd.read_log()
+    rows = rd.log_prefix(n_rows)                     # checked; trimmed only after every check
     last = search.logged_generation()
-    if rows and (rows[-1].get("evaluations") != str(evals)
-                 or rows[-1].get("generation") != str(last)):
-        raise FormatError(f"{rd.log_path}: its row {n_rows} does not end at the checkpoint "
-                          f"(generation {last}, {evals} evaluations); refusing to mix records")
+    if (evals > 0) != (n_rows > 0) or (rows and (rows[-1].get("evaluations") != str(evals)
+                                                 or rows[-1].get("generation") != str(last))):
+        raise FormatError(f"{where}: log_rows {n_rows} does not match {rd.log_path} (its row "
+                          f"{n_rows} must end at generation {last}, {evals} evaluations); "
+                          "refusing to mix records")
+    rd.read_generations()                            # the film's records parse, too
     rec = _Recorder(rd, ident, n_rows, evals, CHECKPOINT_EVERY_S)
     rec.elapsed0 = float(elapsed)
+    rec.trim = n_rows
     return rec
 
 

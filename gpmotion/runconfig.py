@@ -31,7 +31,7 @@ class RunConfig:
     scheduler: str | None = None
     threads: int | None = None
     plugins: list = field(default_factory=list)
-    robust: dict = field(default_factory=dict)          # perturbed starts (compose.robust); {} off
+    robust: dict = field(default_factory=dict)          # perturbed starts (gpmotion.robust); {} off
 
     def to_json(self) -> dict:
         return dict(task=self.task, family=self.family, seed=self.seed, params=self.params,
@@ -65,6 +65,7 @@ class RunConfig:
         for k, v in d.get("family_options", {}).items():
             _check_type(source, f"run.family_options.{k}", v, (str, int, float, bool, list, None))
         _check_search(source, d["family"], d.get("search", {}))
+        _check_bounds(source, d)
         for i, p in enumerate(d.get("plugins", [])):  # requirement records (plugins.require)
             _check_type(source, f"run.plugins[{i}]", p, (str, dict))
         return cls(**d)
@@ -103,6 +104,36 @@ def _check_search(source: str, family: str, search: dict) -> None:
                           f"{family}; known: {sorted(known)}")
     for k, v in search.items():
         _check_type(source, f"run.search.{k}", v, (int, float, str, bool, list, None))
+
+
+ACTUATIONS = ("pd", "kinematic")
+
+
+def _check_bounds(source: str, d: dict) -> None:
+    """The command line's bounds, applied to what config.json records: a hand-edited
+    population of 10^9 or 0 threads is refused as `gpmotion run` refuses it."""
+    from .cli_options import OPTIONS
+    from .records import validate_number
+    if d.get("actuation") is not None and d["actuation"] not in ACTUATIONS:
+        raise FormatError(f"{source}: run.actuation must be one of {', '.join(ACTUATIONS)}, "
+                          f"got {_short(d['actuation'])}")
+    bounds = (("workers", 0, 10_000_000, False), ("threads", 1, 10_000_000, True),
+              ("seed", 0, None, False))
+    try:
+        for key, lo, hi, none in bounds:
+            if key in d:
+                validate_number(f"run.{key}", d[key], lo=lo, hi=hi, integer=True,
+                                allow_none=none)
+        for section, target in (("search", "search"), ("family_options", "family")):
+            for key, value in (d.get(section) or {}).items():
+                for o in OPTIONS:
+                    if o.target == target and o.keys.get(d["family"]) == key and o.check \
+                            and value is not None:
+                        if isinstance(value, list):          # as the flag takes it: A,B
+                            value = ",".join(str(v) for v in value)
+                        o.check(f"run.{section}.{key} ({o.flag})", value)
+    except (ValueError, TypeError, AttributeError) as e:
+        raise FormatError(f"{source}: {e}") from None
 
 
 def _short(x) -> str:

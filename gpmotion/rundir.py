@@ -1,21 +1,36 @@
-"""One run's directory: config.json, log.csv, checkpoint.json, best.json and
-artifacts, with exactly one writer.
+"""A writer's directory (a run, a compose search, a study): its records with
+exactly one writer, checked before anything is changed.
 
-* **One writer.**  :meth:`RunDir.create` takes an exclusive ``flock`` on
-  ``.lock`` inside the directory and holds it until :meth:`close` or the
+API for every writer of a directory (``gpmotion run``/``resume``,
+``gpmotion compose``, ``gpmotion study``)::
+
+    rd = RunDir.create(path)               # new (or empty) directory, locked
+    rd = RunDir.create(path, force=True)   # an existing one is moved aside first
+    rd = RunDir.open(path)                 # an existing one, locked, to continue
+    rd.read_bytes(name) / rd.read_text(name) / rd.read_json(name, kind)
+    rd.write_text(name, text) / rd.write_json(name, kind, obj)   # atomic
+    rd.log_rows([dict, ...]) / rd.read_log() / rd.log_prefix(n) / rd.trim_log(n)
+    rd.names(); rd.exists(name); rd.file(name)   # a path for other libraries' writers
+    rd.close()                             # or ``with RunDir.open(path) as rd:``
+    plain_name(text, what)                 # a name that becomes a path: checked
+    read_regular(path) / read_text(path)   # (gpmotion.records) any input file
+
+* **One writer.**  :meth:`RunDir.create` takes an exclusive ``flock`` on the
+  directory itself (a descriptor of its own), held until :meth:`close` or the
   process dies (the kernel releases it, so a SIGKILLed run never blocks its
-  own resume).  A second ``run``/``resume``/``run --force`` on a live run
-  directory is refused with one line.
-* **Writes go through the directory we locked**, not through its name: every
-  path handed out is ``/proc/self/fd/N/NAME`` (N: our descriptor of the
-  directory), so a run whose directory was renamed or replaced keeps writing
-  into its own files, never into a newcomer's.  (Where /proc is missing the
-  plain path is used.)
-* **Symlinks inside the run directory are never followed**: reads and log
-  appends open with ``O_NOFOLLOW`` (and refuse hard-linked files), JSON and
-  artifacts are replaced by rename (which replaces a link, never its target),
-  and the lock file is the write probe (created, never truncated through a
-  link).
+  own resume).  Deleting ``.lock`` (which only names the holder's pid) cannot
+  unlock it.  A second writer on a live directory is refused with one line.
+* **Writes go through the directory we locked**, not through its name: files
+  are opened relative to our descriptor of the directory (paths handed out
+  are ``/proc/self/fd/N/NAME``), so a run whose directory was renamed or
+  replaced keeps writing into its own files, never into a newcomer's.
+* **Symlinks inside the directory are never followed**: reads and log appends
+  open with ``O_NOFOLLOW`` (and refuse hard-linked files), JSON and artifacts
+  are replaced by rename (which replaces a link, never its target).
+* **Regular files only, never blocking**: every read opens non-blocking and
+  checks ``fstat`` first, so a FIFO, a directory or a device in place of a
+  record is one error line, never a hang.
+* **One line ending** (``\n``) in every log; a torn last line is dropped.
 * Temp files left by a killed writer (``.NAME.PID.HEX.tmp``) are removed when
   the next writer takes the lock.
 """
@@ -34,27 +49,17 @@ from typing import Any
 
 import numpy as np
 
-from .records import (DEFAULT_MAX_BYTES, FormatError, RunDirError, _no_duplicates,
+from .records import (_DISPLAY, DEFAULT_MAX_BYTES, FormatError, RunDirError, _no_duplicates,
                       _reject_constant, atomic_write_json, atomic_write_text, envelope,
-                      parse_json)
+                      display_path, parse_json, read_regular)  # noqa: F401 (display_path: re-exported)
 
 LOCK = ".lock"
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
-_DISPLAY: dict[str, Path] = {}       # "/proc/self/fd/N" -> the path the user gave
 
 
-def display_path(path: str | os.PathLike) -> Path:
-    """``path`` with a RunDir's /proc/self/fd/N prefix shown as the run directory."""
-    s = str(path)
-    for prefix, real in _DISPLAY.items():
-        if s == prefix or s.startswith(prefix + "/"):
-            return Path(str(real) + s[len(prefix):])
-    return Path(s)
-
-
-def _busy(path: Path, lock_fd: int) -> RunDirError:
+def _busy(path: Path, pid_fd: int) -> RunDirError:
     try:
-        pid = os.pread(lock_fd, 32, 0).decode("ascii", "replace").strip()
+        pid = os.pread(pid_fd, 32, 0).decode("ascii", "replace").strip()
     except OSError:
         pid = ""
     who = f" (pid {pid})" if pid.isdigit() else ""
@@ -63,11 +68,14 @@ def _busy(path: Path, lock_fd: int) -> RunDirError:
 
 
 class _Lock:
-    """An exclusive flock on ``.lock`` in an open directory (fd ``dirfd``)."""
+    """An exclusive flock on the directory itself (a descriptor of our own on
+    it, opened through ``dirfd``): deleting or replacing ``.lock`` cannot
+    unlock it.  ``.lock`` only says who holds the lock (and is the write probe)."""
 
     def __init__(self, path: Path, dirfd: int):
         try:
-            fd = os.open(LOCK, os.O_RDWR | os.O_CREAT | _NOFOLLOW, 0o666, dir_fd=dirfd)
+            fd = os.open(LOCK, os.O_RDWR | os.O_CREAT | _NOFOLLOW | os.O_NONBLOCK, 0o666,
+                         dir_fd=dirfd)
         except OSError as e:
             why = "it is a symbolic link" if e.errno == errno.ELOOP else (e.strerror or str(e))
             raise RunDirError(f"cannot write run directory {path}: {LOCK}: {why}") from None
@@ -75,17 +83,20 @@ class _Lock:
         if not stat.S_ISREG(st.st_mode):
             os.close(fd)
             raise RunDirError(f"cannot lock run directory {path}: {LOCK} is not a regular file")
+        lock = os.open(".", os.O_RDONLY | getattr(os, "O_DIRECTORY", 0), dir_fd=dirfd)
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as e:
             err = _busy(path, fd) if e.errno in (errno.EWOULDBLOCK, errno.EACCES) else \
                 RunDirError(f"cannot lock run directory {path}: {e.strerror or e}")
             os.close(fd)
+            os.close(lock)
             raise err from None
         if st.st_nlink == 1:              # ours alone: say who holds it
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        self.fd = fd
+        os.close(fd)
+        self.fd = lock
 
     def release(self):
         if self.fd is not None:
@@ -125,6 +136,29 @@ def _nonempty(path: Path) -> bool:
         return any(n != LOCK for n in os.listdir(path))
     except OSError:
         return False
+
+
+MAX_NAME = 100
+
+
+def plain_name(text, what: str) -> str:
+    """``text`` if it is a plain name that may become one path component (a
+    study, a configuration, an artifact): not empty, at most MAX_NAME
+    characters, no ``/``, ``\\`` or NUL, not ``.``/``..`` nor starting with
+    ``.``, no control characters.  Otherwise a ValueError naming ``what``."""
+    if not isinstance(text, str):
+        raise ValueError(f"{what} must be a name (text), got {type(text).__name__}")
+    why = ("is empty" if not text else
+           f"is longer than {MAX_NAME} characters" if len(text) > MAX_NAME else
+           "contains '/' or '\\'" if "/" in text or "\\" in text else
+           "starts with '.'" if text.startswith(".") else
+           "contains a control character" if any(ord(c) < 32 or ord(c) == 127 for c in text)
+           else "")
+    if why:
+        r = repr(text)
+        raise ValueError(f"{what} {r if len(r) <= 40 else r[:37] + '...'} {why}; "
+                         "it must be a plain name (it becomes a file or folder name)")
+    return text
 
 
 class RunDir:
@@ -175,6 +209,11 @@ class RunDir:
             run.close()
             raise
         return run
+
+    @classmethod
+    def open(cls, path: str | os.PathLike) -> "RunDir":
+        """An existing directory, locked, to continue writing it."""
+        return cls.create(path, resume=True)
 
     def _take(self, must_be_empty: bool) -> None:
         self._lock = _Lock(self.path, self._dirfd)      # also the write probe
@@ -253,28 +292,47 @@ class RunDir:
 
     artifact = file
 
+    def _at(self, name: str) -> tuple[str | Path, int | None]:
+        """(what to open, dir_fd): the name relative to our descriptor when we hold one."""
+        self.file(name)                                   # a plain name
+        return (name, self._dirfd) if self._dirfd is not None else (self.path / name, None)
+
     def exists(self, name: str) -> bool:
         return os.path.lexists(self.file(name))
 
+    def names(self) -> list[str]:
+        """The directory's entries (not the lock, not temp files), sorted."""
+        if self._dirfd is not None:
+            return sorted(_entries(self._dirfd))
+        return sorted(n for n in os.listdir(self.path) if n != LOCK and not _is_temp(n))
+
     def read_bytes(self, name: str, max_bytes: int = DEFAULT_MAX_BYTES) -> bytes:
-        """A file's bytes, refusing symlinks and anything over ``max_bytes``."""
-        shown = self.path / name
+        """A regular file's bytes: a symlink is refused (not followed), a FIFO never
+        waited on, anything over ``max_bytes`` refused (one FormatError line)."""
+        where, dirfd = self._at(name)
+        return read_regular(where, max_bytes, dir_fd=dirfd, follow=False,
+                            shown=self.path / name)
+
+    def read_text(self, name: str, max_bytes: int = DEFAULT_MAX_BYTES) -> str:
+        data = self.read_bytes(name, max_bytes)
         try:
-            fd = os.open(self.file(name), os.O_RDONLY | _NOFOLLOW)
-        except OSError as e:
-            why = "a symbolic link (not followed)" if e.errno == errno.ELOOP else \
-                f"cannot read ({e.strerror or e})"
-            raise FormatError(f"{shown}: {why}") from None
-        with open(fd, "rb") as f:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
-                raise FormatError(f"{shown}: not a regular file")
-            data = f.read(max_bytes + 1)
-        if len(data) > max_bytes:
-            raise FormatError(f"{shown}: larger than the {max_bytes}-byte limit")
-        return data
+            return data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise FormatError(f"{self.path / name}: not UTF-8 text (byte {e.start})") from None
 
     def read_json(self, name: str, kind: str, max_bytes: int = DEFAULT_MAX_BYTES) -> dict:
         return parse_json(self.read_bytes(name, max_bytes), kind=kind, source=str(self.path / name))
+
+    def write_text(self, name: str, text: str) -> Path:
+        """Replace ``name`` atomically (temp file, fsync, rename: a link is replaced,
+        never followed); returns the path as the user knows it."""
+        atomic_write_text(self.file(name), text)
+        return self.path / name
+
+    def write_json(self, name: str, kind: str, obj: dict) -> Path:
+        """``obj`` in a ``gpmotion-KIND`` envelope, written atomically."""
+        atomic_write_json(self.file(name), envelope(kind, obj))
+        return self.path / name
 
     # ------------------------------------------------------------ JSON records
     def write_config(self, config: dict) -> Path:
@@ -310,7 +368,8 @@ class RunDir:
     def _open_log_fd(self, flags: int) -> int:
         """Open log.csv without following a link; refuse one hard-linked elsewhere."""
         try:
-            fd = os.open(self.file(self.LOG), flags | _NOFOLLOW, 0o666)
+            where, dirfd = self._at(self.LOG)
+            fd = os.open(where, flags | _NOFOLLOW | os.O_NONBLOCK, 0o666, dir_fd=dirfd)
         except OSError as e:
             why = "it is a symbolic link (not followed)" if e.errno == errno.ELOOP else \
                 (e.strerror or str(e))
@@ -318,8 +377,9 @@ class RunDir:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
             os.close(fd)
-            raise RunDirError(f"{self.log_path}: not a plain file of this run (a link?); "
+            raise RunDirError(f"{self.log_path}: not a plain file of this run (a link, a FIFO?); "
                               "refusing to write it")
+        os.set_blocking(fd, True)
         return fd
 
     def _open_log(self) -> list[str] | None:
@@ -391,6 +451,20 @@ class RunDir:
             text = text[: text.rfind("\n") + 1]
         return list(csv.DictReader(io.StringIO(text)))
 
+    def log_prefix(self, n_rows: int) -> list[dict[str, str]]:
+        """The first ``n_rows`` rows of log.csv, changing nothing: a resume checks
+        them against its checkpoint before :meth:`trim_log` drops the rest."""
+        if not self.exists(self.LOG):
+            if n_rows:
+                raise FormatError(f"{self.log_path}: missing, but the checkpoint was taken "
+                                  f"after {n_rows} rows of it")
+            return []
+        rows = self.read_log()
+        if len(rows) < n_rows:
+            raise FormatError(f"{self.log_path}: {len(rows)} rows, fewer than the {n_rows} "
+                              "the checkpoint was taken after")
+        return rows[:n_rows]
+
     def trim_log(self, n_rows: int) -> None:
         """Keep the header and the first ``n_rows`` rows (rows written after the
         checkpoint that a resume continues from are dropped); atomic."""
@@ -424,7 +498,7 @@ class RunDir:
                        for r in records).encode("utf-8")
         try:
             fd = os.open(self.file(self.GENERATIONS), os.O_WRONLY | os.O_APPEND | os.O_CREAT
-                         | _NOFOLLOW, 0o666)
+                         | _NOFOLLOW | os.O_NONBLOCK, 0o666)
         except OSError as e:
             why = "it is a symbolic link (not followed)" if e.errno == errno.ELOOP else \
                 (e.strerror or str(e))

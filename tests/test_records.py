@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 from gpmotion import records
 from gpmotion.records import (ConfigError, FormatError, RunDirError, atomic_write_json,
                               atomic_write_text, read_json)
-from gpmotion.rundir import RunDir, display_path
+from gpmotion.records import display_path
+from gpmotion.rundir import RunDir
 
 
 def leftovers(directory):

@@ -10,7 +10,8 @@ import pytest
 from gpmotion import records, rundir
 from gpmotion.cli import main
 from gpmotion.records import FormatError, RunDirError
-from gpmotion.rundir import RunDir, display_path
+from gpmotion.records import display_path
+from gpmotion.rundir import RunDir
 from tests.cli_checks import refused, refused_before_the_directory
 
 GP = ["--param", "seconds=0.3", "--population", "8", "--generations", "3", "--quiet",

@@ -56,8 +56,10 @@ def run_command(args) -> int:
     from ..compose import composite as C
     from ..compose import optimize, session
     from ..compose import script as S
+    from ..records import read_text, validate_number
+    validate_number("--seed", args.seed, lo=0, hi=2**32 - 1, integer=True)
     script = S.load(args.script)
-    text = Path(args.script).read_text(encoding="utf-8")
+    text = read_text(args.script, 1 << 20)
     switches = _floats(args.transitions, "--transitions")
     if args.composite:
         comp = C.load(args.composite)
@@ -78,6 +80,8 @@ def run_command(args) -> int:
               + "  ".join(f"{k} {credits[k][0]:.6g}" for k in script.phases))
         return 0
     out = Path(args.out or f"runs/compose-{Path(args.script).stem}-seed{args.seed}")
+    if args.out is not None and not args.out.strip():
+        raise ValueError(f"--out must name a folder, got {args.out!r}")
     result = session.compose_run(out, text, comp, Q=args.arrays, G=args.rounds, H=args.mutations,
                                  seed=args.seed, perturb=args.perturb, resume=args.resume, log=say,
                                  refine=refine)

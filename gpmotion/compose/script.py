@@ -228,10 +228,11 @@ def parse(text: str) -> Script:
 
 def load(path) -> Script:
     """Parse a script file; errors name the file: ``path:line:col: message``."""
+    from ..records import FormatError, read_text
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
+        text = read_text(path, 1 << 20)          # a regular file: a FIFO never blocks
+    except FormatError as e:
         err = ScriptError(1, 1, f"cannot read script ({e})")
         err.args = (f"{path}: cannot read script ({e})",)
         raise err from None

@@ -9,6 +9,8 @@
                           composite.json names
     OUT/result.json       gpmotion-compose-result: careless and best scores, per-phase credits
 
+The directory is a :class:`gpmotion.rundir.RunDir` (one writer, no links
+followed, regular files only, atomic records, one line ending).
 ``resume=True`` continues from the checkpoint to exactly the result of an
 uninterrupted search (the config must be the same: config.json names the
 controllers by absolute path; the composites in OUT name them relative to OUT).
@@ -17,13 +19,12 @@ it is deterministic, so the result is the same.
 """
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..records import FormatError, atomic_write_json, atomic_write_text, envelope, read_json
+from ..records import FormatError, envelope
+from ..rundir import RunDir
 from . import composite as C
 from . import optimize
 from . import script as S
@@ -43,8 +44,12 @@ def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int
                 ) -> dict | None:
     """Run (or resume) the search into ``out``; return the result dict (None if stopped early).
 
-    ``refine``: {"phases": [names], "rounds": R, "mutants": M} refines those
-    phases' controllers after the search (gpmotion.compose.refine)."""
+    ``out`` is a :class:`~gpmotion.rundir.RunDir`: locked for one writer, its
+    records never read through a link or from a FIFO, written atomically.  A
+    resume checks config, checkpoint and log before it changes anything; with
+    no checkpoint yet (killed before the first round ended) it starts the
+    search again.  ``refine``: {"phases": [names], "rounds": R, "mutants": M}
+    refines those phases' controllers after the search (gpmotion.compose.refine)."""
     out = Path(out)
     script = S.parse(script_text)
     optimize.check_match(comp, script)
@@ -52,35 +57,64 @@ def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int
         refine = {"phases": list(refine["phases"]), "rounds": int(refine.get("rounds", 16)),
                   "mutants": int(refine.get("mutants", 16))}
     config = envelope("compose-config", _config(comp, script_text, Q, G, H, seed, perturb, refine))
-    state = None
-    if resume:
-        old = read_json(out / "config.json", kind="compose-config")
-        if old != config:
-            raise FormatError(f"{out}: config.json differs from this search's settings; not resuming")
-        state = read_json(out / "checkpoint.json", kind="compose-checkpoint")["search"]
-        _trim_log(out / "log.csv", int(state["round"]))
-    else:
-        if out.exists() and any(out.iterdir()):
-            raise FormatError(f"{out}: exists and is not empty (resume it, or pick another --out)")
-        out.mkdir(parents=True, exist_ok=True)
-        atomic_write_json(out / "config.json", config)
-        atomic_write_text(out / "log.csv", ",".join(LOG_FIELDS) + "\n")
-        C.save(out / "careless.json", comp)
+    if not resume and out.is_dir() and RunDir(out).names():
+        raise FormatError(f"{out}: exists and is not empty (resume it, or pick another --out)")
+    with RunDir.create(out, resume=resume) as rd:
+        state, keep = _resume_point(rd, config) if resume else (None, 0)
+        if not resume:
+            rd.write_json(CONFIG, "compose-config", config)
+        if not resume or state is None:
+            C.save(out / "careless.json", comp)
+        return _search(rd, out, script, comp, config, state, keep, log, stop_after_rounds, refine)
+
+
+CONFIG, CHECKPOINT, RESULT = "config.json", "checkpoint.json", "result.json"
+
+
+def _resume_point(rd: RunDir, config: dict) -> tuple[dict | None, int]:
+    """(search state, log rows it was taken after), every record checked, nothing changed."""
+    old = rd.read_json(CONFIG, "compose-config")
+    if old != config:
+        raise FormatError(f"{rd.path}: config.json differs from this search's settings; not resuming")
+    rows = rd.read_log()
+    if not rd.exists(CHECKPOINT):
+        return None, 0                          # killed before its first round: start again
+    ck = rd.read_json(CHECKPOINT, "compose-checkpoint")
+    state = ck.get("search")
+    last = state.get("round") if isinstance(state, dict) else None
+    if type(last) is not int or not 0 <= last <= 10**6:
+        raise FormatError(f"{rd.path / CHECKPOINT}: no valid 'search.round'")
+    rounds = [r.get("round", "") for r in rows]
+    keep = next((i for i, r in enumerate(rounds) if not r.isdigit() or int(r) > last), len(rows))
+    if (keep and rounds[keep - 1] != str(last)) or (last and not keep):
+        raise FormatError(f"{rd.log_path}: its rows do not end at the checkpoint's round {last}; "
+                          "refusing to mix records")
+    return state, keep
+
+
+def _search(rd, out, script, comp, config, state, keep, log, stop_after_rounds, refine):
     rounds = [0]
+    trimmed = [False]
 
     def on_round(ts):
+        if not trimmed[0]:                      # the state loaded: now drop rows after it
+            rd.trim_log(keep)
+            if keep == 0:
+                rd.write_text(rd.LOG, ",".join(LOG_FIELDS) + "\n")
+            trimmed[0] = True
         row = ts.row()
-        buf = io.StringIO()
-        csv.writer(buf).writerow([row[k] if k != "best" else " ".join(f"{x:g}" for x in row[k])
-                                  for k in LOG_FIELDS])
-        with open(out / "log.csv", "a", encoding="utf-8") as f:
-            f.write(buf.getvalue())
-        atomic_write_json(out / "checkpoint.json", envelope("compose-checkpoint", {"search": ts.state_dict()}))
+        rd.log_rows([{k: row[k] if k != "best" else " ".join(f"{x:g}" for x in row[k])
+                      for k in LOG_FIELDS}])
+        rd.write_json(CHECKPOINT, "compose-checkpoint", {"search": ts.state_dict()})
         log(f"round {ts.round}/{ts.G}: best {row['best_score']} at {row['best']} ({ts.evaluations} simulations)")
         rounds[0] += 1
         if stop_after_rounds is not None and rounds[0] >= stop_after_rounds and not ts.done:
             raise _Stop
 
+    Q, G, H, seed, perturb = (config[k] for k in ("Q", "G", "H", "seed", "perturb"))
+    if state is None:
+        rd.write_text(rd.LOG, ",".join(LOG_FIELDS) + "\n")
+        trimmed[0] = True
     try:
         ts = optimize.search(comp, script, Q=Q, G=G, H=H, seed=seed, perturb=perturb, state=state,
                              on_round=on_round)
@@ -94,7 +128,7 @@ def compose_run(out, script_text: str, comp: C.Composite, *, Q: int = 16, G: int
     C.save(out / "composite.json", best)
     result.update(best=_scores(best, script), simulations=ts.evaluations
                   + sum(r["evaluations"] for r in result.get("refined", {}).values()))
-    atomic_write_json(out / "result.json", envelope("compose-result", result))
+    rd.write_json(RESULT, "compose-result", result)
     return result
 
 
@@ -105,14 +139,6 @@ def _refine(out: Path, comp: C.Composite, script, refine: dict, seed: int, log):
     comp, report = R.refine(comp, script, refine["phases"], rounds=refine["rounds"],
                             mutants=refine["mutants"], seed=seed, log=log)
     return R.save_refined(out, comp, report), report
-
-
-def _trim_log(path: Path, last_round: int) -> None:
-    """Drop log rows written after the checkpoint (a crash between the two writes)."""
-    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-    keep = lines[:1] + [ln for ln in lines[1:] if ln.split(",", 1)[0].isdigit() and int(ln.split(",", 1)[0]) <= last_round]
-    if keep != lines:
-        atomic_write_text(path, "".join(keep))
 
 
 def _scores(comp: C.Composite, script: S.Script) -> dict:

@@ -32,12 +32,19 @@ except ModuleNotFoundError:  # Python 3.10
 
 
 def load_spec(path: str | Path) -> dict:
+    from ..records import FormatError, read_text
+    from .specparse import check_top_keys
     path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            return tomllib.load(f)
-    except FileNotFoundError:
-        raise SpecError(f"{path}: no such figure file") from None
+    if not path.exists():
+        raise SpecError(f"{path}: no such figure file")
+    try:                         # a regular UTF-8 file (a FIFO or binary: one line)
+        spec = tomllib.loads(read_text(path, 1 << 20))
+        check_top_keys(spec)
+        return spec
+    except FormatError as e:
+        raise SpecError(str(e)) from None
+    except SpecError as e:
+        raise SpecError(f"{path}: {e}") from None
     except tomllib.TOMLDecodeError as e:
         raise SpecError(f"{path}: not valid TOML ({e})") from None
 

@@ -178,9 +178,24 @@ def _tree_order(spec_bodies, joints, root_body):
 MAX_NAME = 200
 
 
+TOP_KEYS = ("name", "description", "extends", "dimensions", "root", "bodies", "joints",
+            "contacts", "sites", "ground", "limits")
+
+
+def check_top_keys(spec: dict) -> None:
+    """A figure file's top-level keys are the ones a figure has: a misspelt one
+    (``gravty = -1.0``) is refused, never silently ignored."""
+    unknown = sorted(str(k) for k in spec if k not in TOP_KEYS)
+    if unknown:
+        from ..names import did_you_mean
+        raise SpecError(f"figure: unknown top-level key(s) {', '.join(map(repr, unknown))}"
+                        f"{did_you_mean(unknown[0], TOP_KEYS)}; known: {', '.join(TOP_KEYS)}")
+
+
 def _name_and_bodies(spec: dict, parse_body):
     """The figure's name, its raw [[bodies]] list and the parsed bodies by name
     (shared by the planar and the 3-D compilers; ``parse_body(b, i)`` differs)."""
+    check_top_keys(spec)
     name = spec.get("name")
     if not isinstance(name, str) or not name:
         raise SpecError("figure: needs a 'name'")
