@@ -17,6 +17,21 @@ def replay_genome(task, family, actuation, genome):
     return traj, costs, measures, ok
 
 
+def _after_from(params: dict, folder: Path) -> dict:
+    """A record's ``after`` (earlier stages' controller files) resolved against the
+    record's own folder, not the current one; a record that named its stages from
+    the folder it was run in (and has none beside it) keeps that meaning."""
+    after = params.get("after")
+    if not isinstance(after, str) or not after.strip():
+        return params
+    out = []
+    for p in (s.strip() for s in after.split(",") if s.strip()):
+        beside = folder / p
+        out.append(p if Path(p).is_absolute() or not (beside.exists() or not Path(p).exists())
+                   else str(beside))
+    return {**params, "after": ",".join(out)}
+
+
 def load_controller(path: str | Path):
     """(task, family, actuation, genome, record) from best.json or a run dir.
 
@@ -33,7 +48,8 @@ def load_controller(path: str | Path):
     from .plugins import require
     require(rec.get("plugins"), str(path))
     try:
-        task = get_task(task_id(str(rec["task"]), recorded=True), **dict(rec.get("params", {})))
+        params = _after_from(dict(rec.get("params", {})), path.parent)
+        task = get_task(task_id(str(rec["task"]), recorded=True), **params)
         options = recorded_options(str(rec["family"]), rec.get("options"), rec.get("options"))
         family = make_family(str(rec["family"]), task, **options)
         genome = family.from_json(rec["genome"])

@@ -179,16 +179,29 @@ class CreatureTask(Task):
                 + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])
 
 
+_RESOLVING: list[str] = []        # the stage files being resolved, outermost first
+
+
 def stage_end(paths) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Final (q, qd, contact anchors) of saved controllers run in series
     (each for its own task's motion_seconds) from the first one's start
     state: the whole physical state a composite would carry on."""
     from gpmotion.compose import composite
+    import os
+    keys = [os.path.realpath(p) for p in paths]
+    loop = [p for p, k in zip(paths, keys) if k in _RESOLVING]
+    if loop:              # a stage that starts after itself: a cycle, never a RecursionError
+        raise ValueError(f"after: {loop[0]} starts after itself (a cycle through "
+                         f"{' -> '.join(_RESOLVING + [os.path.realpath(loop[0])])})")
+    _RESOLVING.extend(keys)
     try:
         comp = composite.from_controllers(paths)
+        traj, _ = composite.run(comp)          # the stages' own starts: checked the same way
     except (OSError, ValueError) as exc:
-        raise ValueError(f"after: {exc}") from None
-    traj, _ = composite.run(comp)
+        msg = str(exc)
+        raise ValueError(msg if msg.startswith("after: ") else f"after: {msg}") from None
+    finally:
+        del _RESOLVING[-len(keys):]
     if traj.diverged[0]:
         raise ValueError(f"after: the earlier stages {paths} diverge")
     return traj.q[0, -1].copy(), traj.qd[0, -1].copy(), traj.contact_end[0].copy()
