@@ -616,7 +616,10 @@ class DaskEvaluator(_ChunkedEvaluator):
         return False
 
     def _report_idle(self):
-        """Say once per batch that no worker is connected (instead of silence)."""
+        """Say once per batch that no worker is connected (instead of silence); not
+        while the scheduler itself is gone (its stale info lists no workers)."""
+        if getattr(self._client, "status", None) != "running":
+            return
         try:
             n = len(self._client.scheduler_info().get("workers", {}))
         except Exception:
@@ -718,7 +721,7 @@ def make_evaluator(task, family, *, workers: int = 0, scheduler: str | None = No
     :class:`ProcessPoolEvaluator`; else the in-process evaluator (numba
     threads; ``threads`` caps them).  ``plugins``: requirement records
     (default: every plugin loaded in this process).  ``robust``: a run's
-    perturbed-start setting plus its ``seed`` (gpmotion.compose.robust).
+    perturbed-start setting plus its ``seed`` (gpmotion.robust).
     """
     workers = _check_workers(workers, minimum=0)
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):

@@ -486,7 +486,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             prog.update(search.generation, ev, search.best_cost, row)
     except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
         if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
-            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.path}` "
+            raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.current_path}` "
                           "continues") from None
         raise
     finally:
@@ -497,7 +497,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
     if stop["sig"] is not None:
         term = stop["sig"] == signal.SIGTERM
         raise Stopped(f"checkpoint saved after generation {search.generation}; "
-                      f"`gpmotion resume {rec.rd.path}` continues", 143 if term else 130)
+                      f"`gpmotion resume {rec.rd.current_path}` continues", 143 if term else 130)
 
 
 def _finish(rd, cfg, task, family, actuation, search, artifacts):

@@ -210,6 +210,19 @@ class RunDir:
             raise
         return run
 
+    @property
+    def current_path(self) -> Path:
+        """Where the directory we hold is now (renamed since: its new name), for
+        hints such as `gpmotion resume PATH`; the given path when unknown."""
+        if self._dirfd is not None:
+            try:
+                now = os.readlink(f"/proc/self/fd/{self._dirfd}")
+            except OSError:
+                return self.path
+            if now.startswith("/") and not now.endswith(" (deleted)"):
+                return Path(now) if Path(now).resolve() != self.path.resolve() else self.path
+        return self.path
+
     @classmethod
     def open(cls, path: str | os.PathLike) -> "RunDir":
         """An existing directory, locked, to continue writing it."""
