@@ -67,7 +67,8 @@ def _log_curves(run_dir: Path) -> dict:
     """A run's curves from its log.csv: best so far under the final weights
     (None where unknown), under the generation's weights, progress; and the
     evaluations when the first solver appeared."""
-    rows = list(csv.DictReader(io.StringIO((run_dir / "log.csv").read_text())))
+    from .records import read_text
+    rows = list(csv.DictReader(io.StringIO(read_text(run_dir / "log.csv", 1 << 30, follow=False))))
     curve, current, progress, first = [], [], [], None
     for r in rows:
         e = int(r["evaluations"])
@@ -293,7 +294,8 @@ def write_curves(out, task, runs, budget, actuation):
 def replot(out) -> Path:
     """Redraw a compare folder's curves from its runs.json (no search is run)."""
     import json
-    d = json.loads((Path(out) / "runs.json").read_text())
+    from .records import read_text
+    d = json.loads(read_text(Path(out) / "runs.json", follow=False))
     task = get_task(task_id(d["task"], recorded=True), **d["params"])    # bare: before ids, v1
     write_curves(out, task, d["runs"], int(d["budget"]), d["actuation"])
     return Path(out) / "curves.png"

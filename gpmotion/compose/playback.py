@@ -25,9 +25,10 @@ def is_composite(source) -> bool:
     p = Path(str(source))
     if not p.is_file() or p.stat().st_size > (1 << 20):
         return False
+    from ..records import FormatError, read_text
     try:
-        obj = json.loads(p.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, OSError):
+        obj = json.loads(read_text(p, 1 << 20))          # a regular file, never a FIFO's wait
+    except (FormatError, json.JSONDecodeError, RecursionError):
         return False
     return isinstance(obj, dict) and obj.get("format") == f"gpmotion-{C.KIND}"
 
