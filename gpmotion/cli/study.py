@@ -95,8 +95,12 @@ def _run(args) -> int:
 
 
 def _loaded(name):
-    from ..study import load_directory, study_dir
-    return load_directory(study_dir(name))
+    from ..study import load_directory, shipped_names, study_dir
+    path = study_dir(name)
+    if name in shipped_names() and not (path / "study.json").exists():
+        raise ValueError(f"the shipped study {name} has no ledger yet; run it: "
+                         f"gpmotion study run {name} --out DIR")
+    return load_directory(path)
 
 
 def _table(args) -> int:
