@@ -1,25 +1,124 @@
-"""The cache folder for generated, numba-cached kernel modules.
+"""Where compiled code lives: the user's cache folder, never the package.
 
-numba caches only functions that live in a source file, so code we generate
-(GP interpreters, rollout kernels) is written to a file whose name carries a
-hash of everything it depends on, then imported from there.  A warm start
-finds the file and numba's on-disk cache beside it: no recompilation.
+Two kinds of files go there.  numba's on-disk cache of every ``cache=True``
+kernel (``configure_numba``, called as the package is imported, before any
+kernel is compiled): left to itself numba writes ``__pycache__/*.nbi`` beside
+the installed sources, and a later ``pip install -e`` that removes the
+package leaves that folder behind as a namespace package that shadows the
+new install.  And the code we generate (GP interpreters, rollout kernels):
+numba caches only functions that live in a source file, so it is written to
+a file whose name carries a hash of everything it depends on, then imported
+from there.  A warm start finds both: no recompilation.
+
+The folder is ``$GPMOTION_CACHE`` or the user cache directory
+(``~/.cache/gpmotion`` on Linux), then ``<gpmotion version>/<cpu key>``: the
+CPU numba compiles for (its name and features) and the versions of what is
+compiled in (numba, numpy, Python), so machines sharing a home folder and
+successive installs never load each other's machine code.  ``NUMBA_CACHE_DIR``,
+when set, still decides where numba's own cache goes.
 """
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import importlib.util
 import os
 import sys
 from pathlib import Path
 
+CACHE_ENV = "GPMOTION_CACHE"
+
+
+def cache_root() -> Path:
+    """``$GPMOTION_CACHE`` or the user cache directory for gpmotion."""
+    root = os.environ.get(CACHE_ENV)
+    if root:
+        return Path(root).expanduser()
+    try:
+        import platformdirs
+    except ImportError:          # a dependency; the XDG default where it is missing
+        return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "gpmotion"
+    return Path(platformdirs.user_cache_dir("gpmotion", appauthor=False))
+
+
+@functools.lru_cache(maxsize=None)
+def _compile_target() -> tuple[str, str]:
+    """(CPU name, CPU features) numba compiles for: its settings, else the host's.
+
+    The host is read from /proc/cpuinfo where there is one (cheap: ``import
+    gpmotion`` does this before anything else), else asked of LLVM."""
+    name, features = os.environ.get("NUMBA_CPU_NAME"), os.environ.get("NUMBA_CPU_FEATURES")
+    if name is not None and features is not None:
+        return name, features
+    host = _proc_cpuinfo()
+    if host is None:
+        import llvmlite.binding as llvm
+        try:
+            host = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+        except RuntimeError:           # features unknown on this platform
+            host = llvm.get_host_cpu_name(), ""
+    return name or host[0], host[1] if features is None else features
+
+
+def _proc_cpuinfo() -> tuple[str, str] | None:
+    """(model name, flags) of the first processor listed in /proc/cpuinfo."""
+    try:
+        text = Path("/proc/cpuinfo").read_text(errors="replace")
+    except OSError:
+        return None
+    fields = {}
+    for line in text.split("\n\n")[0].splitlines():
+        key, _, value = line.partition(":")
+        fields[key.strip()] = value.strip()
+    if "flags" not in fields:
+        return None
+    return fields.get("model name", "cpu"), fields["flags"]
+
+
+@functools.lru_cache(maxsize=None)
+def cpu_key() -> str:
+    """``<cpu name>-<hash>``: the machine code's target and the versions compiled in."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+    name, features = _compile_target()
+    versions = []
+    for dist in ("numba", "llvmlite", "numpy"):
+        try:
+            versions.append(version(dist))
+        except PackageNotFoundError:
+            versions.append("")
+    safe = "".join(c if c.isalnum() or c in "-." else "_" for c in name.split("@")[0].strip())
+    return f"{safe[:40]}-{digest(name, features, platform.python_version(), *versions)[:12]}"
+
+
+def machine_dir() -> Path:
+    """``<root>/<gpmotion version>/<cpu key>``: everything compiled for this install."""
+    from .version import __version__
+    return cache_root() / __version__ / cpu_key()
+
+
+def configure_numba() -> None:
+    """Point numba's on-disk cache at ``machine_dir()/numba`` unless the user set
+    ``NUMBA_CACHE_DIR``.  Called before any kernel module is imported: numba fixes
+    a function's cache folder when it is decorated.  The environment carries it
+    to worker processes (numba re-reads it there); ``_OURS`` marks a value set
+    here, so a child with its own cache root or version sets its own."""
+    given = os.environ.get("NUMBA_CACHE_DIR")
+    if not given or given == os.environ.get(_OURS):
+        given = str(machine_dir() / "numba")
+        os.environ["NUMBA_CACHE_DIR"] = os.environ[_OURS] = given
+    config = getattr(sys.modules.get("numba"), "config", None)
+    if config is not None:                    # numba imported first: its config too
+        config.CACHE_DIR = given
+
+
+_OURS = "GPMOTION_NUMBA_CACHE_DIR"
+
 
 def cache_dir() -> Path:
-    """``$GPMOTION_CACHE`` or ``~/.cache/gpmotion``, created on demand."""
-    root = os.environ.get("GPMOTION_CACHE") or os.path.join(
-        os.path.expanduser("~"), ".cache", "gpmotion")
-    path = Path(root) / "kernels"
+    """Generated kernel modules: ``machine_dir()/kernels``, created on demand."""
+    path = machine_dir() / "kernels"
     path.mkdir(parents=True, exist_ok=True)
     return path
 

@@ -3,6 +3,12 @@ import importlib
 import sys
 
 import pytest
+from hypothesis import settings
+
+# No test depends on the machine's speed: a loaded CI core may take seconds
+# for an example that takes milliseconds here (a kernel compiling, a busy neighbour).
+settings.register_profile("gpmotion", deadline=None)
+settings.load_profile("gpmotion")
 
 # Process-wide registries a test may add to (plugin folders, primitives, tasks,
 # figures, families).  Each test starts from them as loaded at start-up, so a
