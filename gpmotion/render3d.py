@@ -355,6 +355,51 @@ def motion_events(traj, e: int = 0) -> list[tuple[int, str]]:
     return sorted(events)
 
 
+def motion_frames(traj, e: int = 0, *, task=None, view: dict | None = None) -> dict:
+    """What a picture of episode ``e`` shows, frame by frame: the one source of
+    the PNG/GIF renderers' frames and the HTML report's (gpmotion.report).
+
+    Keys: ``dims`` (2: x–z, 3: x, y, z), ``segments`` [F, n_seg, 2, dims],
+    ``radii``, ``times``, ``poles`` (x, z, r rows or None), ``ground_z`` (None:
+    no ground), ``goal`` (None unless the task names it), ``goal_label``,
+    ``events`` ([(frame, word)]), ``body_index`` (the segments kept by a 3-D
+    view's ``bodies``, else all) and ``view`` (3-D camera settings left over).
+    """
+    if not 0 <= e < traj.n_episodes:
+        raise ValueError(f"episode {e} out of range (the trajectory has {traj.n_episodes})")
+    sc = traj.scene
+    seg = traj.segments()[e]
+    radii = traj.figure.model.seg_r
+    poles = sc.poles if len(sc.poles) else None
+    ground_z = sc.ground_z if sc.ground else None
+    goal_label = getattr(task, "goal_label", None)
+    events = motion_events(traj, e)
+    if hasattr(task, "picture_events"):        # a task's own moments, e.g. "touch"
+        events = sorted(events + list(task.picture_events(traj, e)))
+    keep = np.arange(seg.shape[1])
+    out = dict(dims=traj.figure.dimensions, times=traj.times, poles=poles, events=events,
+               goal_label=goal_label, view={})
+    if traj.figure.dimensions == 2:
+        return dict(out, segments=seg, radii=radii, ground_z=ground_z, body_index=keep,
+                    goal=tuple(sc.goal) if goal_label else None)
+    if view is None:
+        view = getattr(task, "view", None) or {}
+    view = dict(view)
+    bodies = view.pop("bodies", None)
+    if bodies is not None:
+        names = traj.figure.body_names
+        unknown = [b for b in bodies if b not in names]
+        if unknown:
+            raise ValueError(f"view: unknown bodies {unknown}")
+        keep = np.array([names.index(b) for b in bodies], dtype=int)
+        seg, radii = seg[:, keep], radii[keep]
+    if not view.pop("ground", True):
+        ground_z = None
+    goal = (float(sc.goal[0]), float(sc.goal_y), float(sc.goal[1])) if goal_label else None
+    return dict(out, segments=seg, radii=radii, ground_z=ground_z, body_index=keep, goal=goal,
+                view=view)
+
+
 def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=None,
                targets=None, view: dict | None = None, speed: float = 1.0) -> None:
     """Filmstrip PNG and/or GIF of episode ``e`` of a Trajectory: the planar
@@ -371,42 +416,19 @@ def render_any(traj, filmstrip=None, gif=None, title=None, e: int = 0, *, task=N
     ``elev``/``azim``, ``bodies`` to draw (a close-up: the axis limits follow
     them) and ``ground`` (False: no grid).
     """
-    if not 0 <= e < traj.n_episodes:
-        raise ValueError(f"episode {e} out of range (the trajectory has {traj.n_episodes})")
-    sc = traj.scene
-    seg = traj.segments()[e]
-    radii = traj.figure.model.seg_r
-    poles = sc.poles if len(sc.poles) else None
-    ground_z = sc.ground_z if sc.ground else None
-    goal_label = getattr(task, "goal_label", None)
-    events = motion_events(traj, e)
-    if hasattr(task, "picture_events"):        # a task's own moments, e.g. "touch"
-        events = sorted(events + list(task.picture_events(traj, e)))
-    if traj.figure.dimensions == 2:
+    m = motion_frames(traj, e, task=task, view=view)
+    seg, radii, events = m["segments"], m["radii"], m["events"]
+    if m["dims"] == 2:
         from . import render
-        kw = dict(poles=poles, ground_z=ground_z, title=title, goal_label=goal_label,
-                  goal=tuple(sc.goal) if goal_label else None)
+        kw = dict(poles=m["poles"], ground_z=m["ground_z"], title=title,
+                  goal_label=m["goal_label"], goal=m["goal"])
         if filmstrip:
             render.filmstrip(filmstrip, seg, radii, traj.times, events=events, **kw)
         if gif:
             render.animate(gif, seg, radii, traj.times, speed=speed, **kw)
         return
-    if view is None:
-        view = getattr(task, "view", None) or {}
-    view = dict(view)
-    bodies = view.pop("bodies", None)
-    if bodies is not None:
-        names = traj.figure.body_names
-        unknown = [b for b in bodies if b not in names]
-        if unknown:
-            raise ValueError(f"view: unknown bodies {unknown}")
-        keep = [names.index(b) for b in bodies]
-        seg, radii = seg[:, keep], radii[keep]
-    if not view.pop("ground", True):
-        ground_z = None
-    goal = (float(sc.goal[0]), float(sc.goal_y), float(sc.goal[1])) if goal_label else None
-    kw = dict(poles=poles, ground_z=ground_z, goal=goal, goal_label=goal_label,
-              targets=targets, title=title, **view)
+    kw = dict(poles=m["poles"], ground_z=m["ground_z"], goal=m["goal"],
+              goal_label=m["goal_label"], targets=targets, title=title, **m["view"])
     if filmstrip:
         filmstrip3d(filmstrip, seg, radii, traj.times, events=events, **kw)
     if gif:

@@ -110,16 +110,25 @@ class Progress:
         self._shown = now
         el = now - self.t0
         rate = self.evals / el if el > 0 else 0.0
-        final = (row or {}).get("best_final")
-        best_s = f"best {best:.4f}" + (f" (final weights {float(final):.4f})"
-                                       if final not in (None, "") else "")
-        line = (f"gen {gen:>4}/{self.total}  {best_s}  median {np.median(ev.costs):.4f}  "
+        line = (f"gen {gen:>4}/{self.total}  {_bests(row, best, ev)}  "
                 f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
                 f"{rate:,.0f} evals/s  {eta}")
         if self.tty:
             print("\r" + line + "\033[K", end="\n" if last else "", file=sys.stderr, flush=True)
         else:
             print(line, file=sys.stderr, flush=True)
+
+
+def _bests(row: dict | None, best: float, ev) -> str:
+    """The log row's numbers under its names: ``best so far`` and the median beside
+    it under the current weights, ``best final`` under the final weights (– while
+    unknown: a curriculum's scene is not final yet)."""
+    row = row or {}
+    now = row.get("best_so_far", best)
+    median = row.get("gen_median", np.median(ev.costs))
+    final = row.get("best_final")
+    final_s = "–" if final in (None, "") else f"{float(final):.4f}"
+    return f"best so far {float(now):.4f} (median {float(median):.4f})  best final {final_s}"
 
 
 def _shown(params: dict) -> dict:
@@ -506,6 +515,9 @@ def _finish(rd, cfg, task, family, actuation, search, artifacts):
     write_best(rd, cfg, task, family, actuation, search, replay)
     if artifacts:
         write_artifacts(rd, task, family, search.best, replay[0])
+        from .report import write_report                      # the interactive report.html
+        write_report(rd.path, rd.artifact("report.html"),
+                     best=(task, family, actuation, search.best, replay[0]))
 
 
 def _main_thread():

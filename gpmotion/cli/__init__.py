@@ -29,6 +29,11 @@ def cmd_robustness(args):
     return run_command(args)
 
 
+def cmd_report(args):
+    from .report import cmd_report as run
+    return run(args)
+
+
 def cmd_study(args):
     from .study import run_command
     return run_command(args)
@@ -37,7 +42,7 @@ def cmd_study(args):
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "resume": cmd_resume, "replay": cmd_replay,
             "render": cmd_render, "check": cmd_check, "compare": cmd_compare, "export": cmd_export,
             "compose": cmd_compose, "robustness": cmd_robustness,
-            "study": cmd_study}
+            "study": cmd_study, "report": cmd_report}
 __all__ = ["COMMANDS", "main", "parser", "_run_configs"]
 
 
@@ -155,6 +160,10 @@ def parser() -> argparse.ArgumentParser:
     add_robust_args(sub.add_parser("robustness", help=ROBUST_HELP))
     from .study import HELP as STUDY_HELP, add_arguments as add_study_args
     add_study_args(sub.add_parser("study", help=STUDY_HELP))
+    from .report import HELP as REPORT_HELP, add_arguments as add_report_args
+    p = sub.add_parser("report", help=REPORT_HELP)
+    add_report_args(p)
+    _add_plugins_arg(p)
     return ap
 
 
