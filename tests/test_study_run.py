@@ -156,3 +156,18 @@ def test_two_workers_give_the_serial_rows(tmp_path):
                  "--workers", "2"]) == 0
     assert untimed(read_rows(tmp_path / "pool")) == untimed(read_rows(tmp_path / "serial"))
     assert controllers(tmp_path / "pool") == controllers(tmp_path / "serial")
+
+
+def test_sigterm_checkpoints_and_names_the_study_command(tmp_path):
+    s, out = spec(tmp_path, gens=400), tmp_path / "out"
+    proc = _gpm("study", "run", s, "--out", out, "--quiet")
+    t0 = time.time()
+    while not list(out.glob("runs/*/checkpoint.json")):
+        assert time.time() - t0 < 300, "no search ever checkpointed"
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=300)
+    if proc.returncode == 0:
+        pytest.skip("the study finished before the signal arrived")
+    assert proc.returncode == 143 and "gpmotion study run" in err, err
+    assert main(["study", "run", str(s), "--out", str(out), "--quiet"]) == 0

@@ -246,11 +246,17 @@ def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1
         todo = [j for j in jobs(spec, seeds, runs.resolve(), scheduler, quiet=quiet or workers > 1)
                 if j.key not in done]
         progress = progress or StudyProgress(len(todo), len(done), quiet)
-        for row, controllers in _finished(todo, workers):
-            for name, rec in controllers.items():
-                sd.write_controller(name, rec)
-            sd.append(row)
-            progress.done(row, workers)
+        try:
+            for row, controllers in _finished(todo, workers):
+                for name, rec in controllers.items():
+                    sd.write_controller(name, rec)
+                sd.append(row)
+                progress.done(row, workers)
+        except KeyboardInterrupt as e:            # the run loop checkpointed (Ctrl-C, SIGTERM)
+            from ..run import Stopped
+            what = str(e).split(";")[0] or "stopped"
+            raise Stopped(f"{what}; the same `gpmotion study run` continues the study",
+                          getattr(e, "code", 130)) from None
         return sd.rows()
 
 
