@@ -417,12 +417,12 @@ def run_curve(path, rows: Sequence[Mapping[str, str]], task, title: str | None =
     gs = GridSpec(2 if windows else 1, 1, figure=fig,
                   height_ratios=[4, 0.35 + 0.28 * len(windows)] if windows else None)
     ax = fig.add_subplot(gs[0])
-    ax.plot(x, best, lw=1.8, color="tab:blue", label="best so far, current weights")
+    ax.plot(x, best, lw=1.8, color="tab:blue", label="best so far (current weights)")
     if median is not None:
         ax.plot(x, median, lw=1.0, ls="--", color="tab:blue", alpha=0.6,
-                label="generation median, current weights")
+                label="generation median (current weights)")
     if final is not None:
-        ax.plot(x, final, lw=1.8, color="tab:green", label="best so far, final weights")
+        ax.plot(x, final, lw=1.8, color="tab:green", label="best final (final weights)")
     _cost_limits(ax, best, final, median)
     ax.set_ylabel("cost (lower is better)" if final is not None
                   else "cost (lower is better),\ncurrent weights")

@@ -99,3 +99,29 @@ def test_the_cpu_key_names_the_target_numba_compiles_for(monkeypatch):
         cache._compile_target.cache_clear()
         cache.cpu_key.cache_clear()
     assert cache.cpu_key() == host
+
+
+def _shown_numbers(line: str) -> tuple:
+    import re
+    m = re.search(r"best so far (\S+) \(median (\S+)\)  best final (\S+)", line)
+    assert m, line
+    return m.groups()
+
+
+@pytest.mark.parametrize("task, extra", [("lamp_hop", ["--preset", "gritz-hahn"]),
+                                         ("lamp_limbo", [])])
+def test_the_progress_line_shows_the_numbers_of_the_log_row(task, extra, tmp_path, capsys):
+    """best so far and the median beside it under the current weights, best final
+    under the final weights: the same numbers as log.csv's row, also under the
+    paper's preset and the limbo's curriculum (best final unknown until it ends)."""
+    import csv
+    from gpmotion.cli import main
+    out = tmp_path / "r"
+    assert main(["run", task, *extra, "--out", str(out), "--param", "seconds=0.3",
+                 "--population", "8", "--generations", "3", "--no-artifacts"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.lstrip("\r").startswith("gen ")]
+    with open(out / "log.csv", newline="") as f:
+        row = list(csv.DictReader(f))[-1]
+    want = (f"{float(row['best_so_far']):.4f}", f"{float(row['gen_median']):.4f}",
+            "–" if row["best_final"] == "" else f"{float(row['best_final']):.4f}")
+    assert _shown_numbers(lines[-1]) == want

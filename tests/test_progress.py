@@ -18,13 +18,13 @@ def test_first_eta_waits_for_a_measured_pace():
     assert p.eta(11, 102.0) == f"eta {2.0 / 10 * 3989:,.0f}s"
 
 
-def test_progress_line_shows_best_under_final_weights(capsys):
+def test_progress_line_shows_the_log_rows_bests_by_their_names(capsys):
     p = Progress(10, every=0)
-    p.update(1, ev(), 0.5, {"best_final": 4.25})
-    p.update(2, ev(), 0.4, {})
+    p.update(1, ev(), 0.5, {"best_so_far": 0.25, "gen_median": 1.5, "best_final": 4.25})
+    p.update(2, ev(), 0.4, {"best_so_far": 0.2, "gen_median": 1.5, "best_final": ""})
     err = capsys.readouterr().err.splitlines()
-    assert "best 0.5000 (final weights 4.2500)" in err[0]
-    assert "best 0.4000  median" in err[1]
+    assert "best so far 0.2500 (median 1.5000)  best final 4.2500" in err[0]
+    assert "best so far 0.2000 (median 1.5000)  best final –" in err[1]
 
 
 def test_banner_names_actuation_and_phase_schedule(tmp_path, capsys):

@@ -305,7 +305,7 @@ def test_run_curve_marks_phase_ins_and_says_which_weights(drawn, tmp_path):
     spans = sorted(tuple(np.round(p.get_x(), 3) for p in [bar]) for bar in strip.patches)
     assert spans[0] == (300.0,)                                   # progress 0.1 → 300 evaluations
     labels = [ln.get_label() for ln in main.lines]
-    assert labels == ["best so far, current weights", "generation median, current weights"]
+    assert labels == ["best so far (current weights)", "generation median (current weights)"]
 
 
 def test_run_curve_plots_best_under_final_weights_when_logged(drawn, tmp_path):
@@ -313,7 +313,7 @@ def test_run_curve_plots_best_under_final_weights_when_logged(drawn, tmp_path):
     render.run_curve(tmp_path / "curve.png", log_rows(final=True), gpmotion.get_task("lamp_limbo"))
     fig = drawn["curve.png"]
     main = fig.axes[0]
-    assert "best so far, final weights" in [ln.get_label() for ln in main.lines]
+    assert "best final (final weights)" in [ln.get_label() for ln in main.lines]
     assert "pole_height (curriculum)" in " ".join(texts(fig))
     lo, hi = main.get_ylim()
     assert lo < 0.01 and hi >= 0.2 and hi < 2.0                # the best curves whole, not the median spike
