@@ -103,9 +103,16 @@ class Spec:
 
 
 def plain_name(text, what: str) -> str:
-    """A name that becomes part of a file name: lower-case letters, digits,
-    ``-``, ``_`` and ``.``, starting with a letter or digit."""
-    if not isinstance(text, str) or not _NAME.match(text) or ".." in text:
+    """A name that becomes part of a file name: the run-directory layer's plain
+    name (gpmotion.rundir.plain_name), and here lower-case letters, digits,
+    ``-``, ``_`` and ``.``, starting with a letter or digit (stable on every
+    file system)."""
+    from ..rundir import plain_name as plain
+    try:
+        plain(text, what)
+    except ValueError as e:
+        raise SpecError(str(e)) from None
+    if not _NAME.match(text) or ".." in text:
         raise SpecError(f"{what} must be a plain name (a-z, 0-9, '-', '_', '.'; at most 80), "
                         f"got {_short(text)}")
     return text
