@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from gpmotion.compose.robust import robustness
+from gpmotion.robust import robustness
 from gpmotion.replay import load_controller
 from gpmotion.run import RunConfig, run
 from gpmotion.task import task_id

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from gpmotion.compose.robust import normalize
+from gpmotion.robust import normalize
 from gpmotion.inprocess import InProcessEvaluator
 from gpmotion.families import make_family
 from gpmotion.task import get_task

@@ -1,6 +1,10 @@
 """gpmotion: evolve controllers for physically simulated articulated figures."""
+from .cache import configure_numba as _configure_numba
+_configure_numba()     # numba's cache in the user's cache folder, before any kernel compiles
+import importlib as _importlib
 import importlib.util as _ilu
 import sys as _sys
+import types as _types
 from pathlib import Path as _Path
 
 
@@ -26,26 +30,49 @@ def _mount_plugin_packages():
 _mount_plugin_packages()
 from .version import __version__
 
-from .check import check_family, check_primitive, check_task
-from .evaluation import Evaluation
-from .evaluators import make_evaluator
-from .families import make_family
-from .figures import SpecError, compile_spec, figure_names, load_figure, register_figure
-from .gp.primitives import STANDARD as STANDARD_PRIMITIVES, primitive
-from .toolbox import evaluate_population, make_toolbox
-from .model import Figure, Model, Scene, make_scene
-from .plugins import load_folder as load_plugins
-from .records import read_json
-from .replay import load_controller, replay_genome
-from .controller_file import save_controller
-from .run import RunConfig, run     # the function: `gpmotion.run(cfg)`; the module is gpmotion.run's home
-from .sim.rollout import Trajectory, rollout, simulate
-from .task import Ease, Task, Term, get_task, register_task, task_ids, task_names
-from . import compose  # composite motions: script language, composites, transition search, robust starts
+# Public names, resolved on first use (PEP 562): `import gpmotion` and the
+# simulator stay light, and only what a program touches is imported (the
+# harness, DEAP and the CLI load when a name of theirs is first used).
+_LAZY = {
+    "check_family": "check", "check_primitive": "check", "check_task": "check",
+    "Evaluation": "evaluation", "make_evaluator": "evaluators", "make_family": "families",
+    "SpecError": "figures", "compile_spec": "figures", "figure_names": "figures",
+    "load_figure": "figures", "register_figure": "figures",
+    "STANDARD_PRIMITIVES": ("gp.primitives", "STANDARD"), "primitive": "gp.primitives",
+    "evaluate_population": "toolbox", "make_toolbox": "toolbox",
+    "Figure": "model", "Model": "model", "Scene": "model", "make_scene": "model",
+    "load_plugins": ("plugins", "load_folder"), "read_json": "records",
+    "load_controller": "replay", "replay_genome": "replay", "save_controller": "controller_file",
+    "RunConfig": "run", "run": "run",        # the function `gpmotion.run(cfg)`, not the module
+    "Trajectory": "sim.rollout", "rollout": "sim.rollout", "simulate": "sim.rollout",
+    "Ease": "task", "Task": "task", "Term": "task", "get_task": "task", "register_task": "task",
+    "task_ids": "task", "task_names": "task",
+    "compose": ("compose", None),            # the package: composite motions
+}
+__all__ = sorted(_LAZY) + ["__version__"]
 
-__all__ = ["Ease", "Task", "Term", "check_family", "check_primitive", "check_task", "get_task", "register_task",
-           "task_names", "task_ids", "STANDARD_PRIMITIVES", "Figure", "Model", "Scene", "SpecError", "Trajectory", "compile_spec",
-           "figure_names", "load_figure", "make_scene", "register_figure", "rollout", "simulate",
-           "primitive", "load_plugins", "RunConfig", "run", "load_controller", "replay_genome",
-           "save_controller", "read_json", "make_family", "make_evaluator", "Evaluation",
-           "make_toolbox", "evaluate_population", "__version__"]
+
+def __getattr__(name):
+    target = _LAZY.get(name)
+    if target is None:
+        raise AttributeError(f"module 'gpmotion' has no attribute {name!r}")
+    module, attr = (target, name) if isinstance(target, str) else target
+    value = _importlib.import_module(f"{__name__}.{module}")
+    return value if attr is None else getattr(value, attr)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(_types.ModuleType):
+    """Importing the submodule gpmotion.run would bind the name ``run`` to the
+    module; the public name is the function, so that binding is not kept."""
+
+    def __setattr__(self, name, value):
+        if name == "run" and isinstance(value, _types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+_sys.modules[__name__].__class__ = _Package

@@ -26,7 +26,7 @@ class InProcessEvaluator:
     family: Family
     actuation: str | None = None
     threads: int | None = None
-    robust: dict | None = None           # perturbed starts (gpmotion.compose.robust), + the run's seed
+    robust: dict | None = None           # perturbed starts (gpmotion.robust), + the run's seed
     evaluations: int = field(default=0, init=False)
 
     def __post_init__(self):
@@ -56,7 +56,7 @@ class InProcessEvaluator:
         if not genomes:
             return Evaluation(np.zeros(0), np.zeros(0, bool), np.zeros(0, bool), {}, [])
         if self.robust:
-            from .compose.robust import batch_evaluation
+            from .robust import batch_evaluation
             self.evaluations += len(genomes)
             return batch_evaluation(self, genomes, progress, generation)
         traj = self.rollout(genomes, progress=progress)

@@ -214,7 +214,7 @@ def test_cli_scheduler_lost_exits_3_and_resumes_on_a_process_pool(cluster, tmp_p
     last = err.strip().splitlines()[-1]
     assert last.startswith("gpmotion: error: lost the Dask scheduler") and "gpmotion resume" in last
     assert "Traceback" not in err and "distributed.client" not in err
-    from gpmotion.records import RunDir
+    from gpmotion.rundir import RunDir
     assert RunDir(out).load_checkpoint()["evaluations"] > 0          # intact, readable
 
     from gpmotion.cli import main

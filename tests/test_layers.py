@@ -1,15 +1,21 @@
 """The import graph of gpmotion: no circles, and no layer imports one above it.
 
-Module-level imports only (an import inside a function runs later, when every
-module is loaded, and cannot close a circle at import time).  Layers, lowest
-first: ``records`` (safe JSON I/O and the error types) and ``cache`` import
+Every import counts, the ones inside functions too: a deferred import still
+ties the lower module to the upper one, so a circle or an upward edge made of
+function-level imports is as much a layering fault as a module-level one.
+Layers, lowest first: ``records`` (safe JSON I/O and the error types) and ``cache`` import
 nothing of gpmotion; the simulator (``sim``, ``model``, ``figures``) and the
 in-kernel controller protocol (``controllers``: ``ControllerBatch``, the
 schedule kernel the episode loop runs by default) know nothing of GP, BSR,
 tasks or searches; ``gp`` holds the representation and its operators; the
-harness (evaluation, families, searches, runs, the CLI) sits above them.
+harness (evaluation, families, searches, robust starts) sits above them, then
+runs, composites and studies, and the command line (``gpmotion.cli``) on top:
+no module outside it sees an argparse namespace or imports it.
 """
 import ast
+import importlib
+import subprocess
+import sys
 from pathlib import Path
 
 import networkx as nx
@@ -47,7 +53,7 @@ def import_graph() -> nx.DiGraph:
     g.add_nodes_from(modules)
     for mod, path in files.items():
         is_pkg = path.name == "__init__.py"
-        for node in ast.parse(path.read_text()).body:          # module level only
+        for node in ast.walk(ast.parse(path.read_text())):     # every import, nested too
             targets = []
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
@@ -70,6 +76,7 @@ def test_the_scan_sees_real_edges():
     g = import_graph()
     assert g.has_edge("gpmotion.sim.backend", "gpmotion.sim.backend_3d")
     assert g.has_edge("gpmotion.figures.spec", "gpmotion.figures.specparse")
+    assert g.has_edge("gpmotion.inprocess", "gpmotion.robust")        # inside a function
 
 
 def test_no_import_circles():
@@ -90,15 +97,54 @@ FORBIDDEN = [
       "gpmotion.inprocess", "gpmotion.run", "gpmotion.cli", "gpmotion.records", "gpmotion.toolbox",
       "gpmotion.compose")),
     (("gpmotion.search",), ("gpmotion.run", "gpmotion.cli", "gpmotion.compare", "gpmotion.rundir")),
+    (("gpmotion.evaluation", "gpmotion.evaluators", "gpmotion.inprocess", "gpmotion.robust",
+      "gpmotion.toolbox", "gpmotion.families", "gpmotion.task"),
+     ("gpmotion.run", "gpmotion.cli", "gpmotion.compose", "gpmotion.compare", "gpmotion.study")),
+    (("gpmotion.run", "gpmotion.compose", "gpmotion.study", "gpmotion.compare", "gpmotion.report"),
+     ("gpmotion.cli",)),
 ]
+
+
+# modules with no gpmotion imports of their own, which any layer may use
+LEAVES = ("gpmotion.version",)
+
+# the command line's own modules, and the `python -m` entry points that call it
+CLI_ENTRY = ("gpmotion.cli", "gpmotion.__main__", "gpmotion.compose.__main__")
 
 
 def _in(module: str, group) -> bool:
     return any(module == p or module.startswith(p + ".") for p in group)
 
 
-@pytest.mark.parametrize("low,high", FORBIDDEN, ids=["leaves", "sim", "gp", "search"])
+@pytest.mark.parametrize("low,high", FORBIDDEN, ids=["leaves", "sim", "gp", "search", "evaluation",
+                                                    "harness"])
 def test_no_layer_imports_one_above_it(low, high):
     g = import_graph()
-    bad = [(a, b) for a, b in g.edges if _in(a, low) and _in(b, high)]
+    bad = [(a, b) for a, b in g.edges
+           if _in(a, low) and _in(b, high) and a not in CLI_ENTRY and b not in LEAVES]
     assert not bad, f"upward imports: {bad}"
+
+
+
+def test_only_the_entry_points_import_the_command_line():
+    g = import_graph()
+    bad = [(a, b) for a, b in g.edges if _in(b, ("gpmotion.cli",)) and not _in(a, CLI_ENTRY)]
+    assert not bad, f"modules importing the CLI: {bad}"
+
+
+def test_importing_the_simulator_loads_no_harness():
+    """`import gpmotion` resolves its public names lazily: the simulator alone
+    imports neither the harness, DEAP, Dask nor the CLI."""
+    code = ("import sys, gpmotion, gpmotion.sim.rollout, gpmotion.figures\n"
+            "heavy = ('deap', 'distributed', 'matplotlib', 'gpmotion.cli', 'gpmotion.run',\n"
+            "         'gpmotion.search', 'gpmotion.families', 'gpmotion.evaluators')\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy or m in heavy))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout
+
+
+def test_public_names_resolve():
+    for name in gpmotion.__all__:
+        assert getattr(gpmotion, name) is not None, name
+    importlib.import_module("gpmotion.run")             # importing the module keeps the function
+    assert callable(gpmotion.run) and gpmotion.run.__module__ == "gpmotion.run"

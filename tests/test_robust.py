@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gpmotion import get_task, load_figure, make_scene, rollout
-from gpmotion.compose import robust as R
+from gpmotion import robust as R
 from gpmotion.controllers import schedule
 from gpmotion.families import make_family
 from gpmotion.task import WORST
@@ -277,7 +277,7 @@ def test_the_documented_robust_controllers_keep_their_success_rate(name, rate):
     judged from the same 100 starts (trial 0 nominal); a change to the simulator, the
     perturbations or the judge that moves these rates must say so in the docs."""
     from pathlib import Path
-    from gpmotion.compose.robust import robustness
+    from gpmotion.robust import robustness
     from gpmotion.replay import load_controller
     path = Path(__file__).resolve().parent.parent / "docs" / "notes" / "robust" / f"{name}.json"
     task, family, actuation, genome, _ = load_controller(str(path))

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gpmotion import get_task
-from gpmotion.compose import robust as R
+from gpmotion import robust as R
 from gpmotion.evaluation import Evaluation
 from gpmotion.families import make_family
 

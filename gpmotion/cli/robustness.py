@@ -25,7 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_command(args) -> int:
     from ..replay import load_controller
-    from ..compose.robust import SIZE_KEYS, Perturbation, robustness, sizes_for
+    from ..robust import SIZE_KEYS, Perturbation, robustness, sizes_for
     task, family, actuation, genome, _ = load_controller(args.source)
     given = {k: getattr(args, k) for k in SIZE_KEYS if getattr(args, k) is not None}
     sizes = Perturbation(**{**asdict(sizes_for(type(task).figure)), **given})

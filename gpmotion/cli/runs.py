@@ -66,6 +66,7 @@ def _run_configs(args):
     if len(series) > 1:
         raise ValueError("--param: only one parameter may be a comma list (a series)")
     validate_number("--seeds", args.seeds, lo=1, hi=10_000, integer=True)
+    _check_out(args.out)
     validate_number("--workers", args.workers, lo=0, hi=10_000_000, integer=True)
     validate_number("--threads", args.threads, lo=1, hi=10_000_000, integer=True, allow_none=True)
     search, fam = collect(args, args.controller)
@@ -88,6 +89,12 @@ def _run_configs(args):
                             actuation=args.actuation, workers=args.workers,
                             scheduler=args.scheduler, threads=args.threads,
                             plugins=list(plugins), robust=dict(robust)), name
+
+
+def _check_out(out) -> None:
+    """--out, when given, names a folder: '' (or blanks) is refused, never the default."""
+    if out is not None and not str(out).strip():
+        raise ValueError(f"--out must name a folder, got {out!r}")
 
 
 def _figure_variant(task_name, path):
@@ -183,8 +190,8 @@ def _refuse_series(path: Path):
 
 
 def _add_robust_arguments(p) -> None:
-    from ..compose.robust import SIZE_KEYS
     """``gpmotion run``'s robust-start options (an argument group)."""
+    from ..robust import SIZE_KEYS
     g = p.add_argument_group("robust controllers (Auslander et al. §3: perturbed starts)")
     g.add_argument("--robust-starts", type=int, metavar="K",
                    help="score every controller from K randomly perturbed starts (joint angles, "
@@ -208,7 +215,7 @@ def _add_robust_arguments(p) -> None:
 def _robust_setting(args) -> dict:
     """The ``robust`` entry of a RunConfig from parsed ``gpmotion run`` options (only what
     was given; :func:`normalize` fills in the rest once the task is known)."""
-    from ..compose.robust import SIZE_KEYS
+    from ..robust import SIZE_KEYS
     from ..records import ConfigError, validate_number
     out = {}
     if getattr(args, "robust_starts", None) is not None:

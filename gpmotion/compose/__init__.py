@@ -4,7 +4,8 @@
 * :mod:`.composite` — saved controllers in series, state carried across switches; the file
 * :mod:`.transitions` — the transition search (Fig. 5) as an ask/tell object
 * :mod:`.optimize` — score switch times with a script; run the search on a composite
-* :mod:`.robust` — evaluation from perturbed starts ("enhanced" controllers)
+* :mod:`gpmotion.robust` — evaluation from perturbed starts ("enhanced" controllers; the
+  evaluation layer, re-exported here)
 """
 from .composite import Composite, CompositeError, from_controllers
 from .composite import load as load_composite
@@ -12,7 +13,7 @@ from .composite import run as run_composite
 from .composite import save as save_composite
 from .optimize import score as score_switches
 from .optimize import search as search_transitions
-from .robust import Perturbation, perturbed_starts
+from ..robust import Perturbation, perturbed_starts
 from .script import Script, ScriptError
 from .script import load as load_script
 from .script import parse as parse_script

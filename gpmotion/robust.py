@@ -1,5 +1,8 @@
 """Robust ("enhanced") controllers: evaluation from perturbed starts (Auslander et al. §3).
 
+The evaluation layer: the in-process and remote evaluators run a robust batch
+through here, so it imports nothing of compose, run or the CLI.
+
 "By randomly perturbing the initial physical configuration of the
 articulated figure during each iteration of the original motion-synthesis
 process, the resulting sense-based motion controller can be made more robust."
@@ -25,10 +28,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..controllers import ControllerBatch
-from ..sim.backend import backend_of
-from ..sim.rollout import rollout
-from ..task import WORST
+from .controllers import ControllerBatch
+from .sim.backend import backend_of
+from .sim.rollout import rollout
+from .task import WORST
 
 AGGREGATES = ("mean", "worst")       # and "qNN": the NN-th percentile start (q80, q90, ...)
 
@@ -212,7 +215,7 @@ def normalize(robust: dict | None, task) -> dict:
     ConfigError line."""
     if not robust:
         return {}
-    from ..records import ConfigError, validate_number
+    from .records import ConfigError, validate_number
     unknown = sorted(set(robust) - set(SETTING_KEYS))
     if unknown:
         raise ConfigError(f"robust: unknown setting(s) {unknown}; known: {list(SETTING_KEYS)}")
@@ -261,7 +264,7 @@ def batch_evaluation(ev, genomes, progress: float, generation: int):
     starts does so 6 % of the time, and a population of 300 has many — so
     ``stop_on_success`` and the best-ever cost picked lucky controllers.
     """
-    from ..evaluation import Evaluation
+    from .evaluation import Evaluation
     r, task, fam = ev.robust, ev.task, ev.family
     k, n = r["starts"], len(genomes)
     traj = _batch_rollout(ev, genomes, progress, k, round_rng(r["seed"], generation))
