@@ -28,19 +28,15 @@ from __future__ import annotations
 import csv
 import io
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .compare_summary import _bands, summarize
 from .families import make_family
 from .plugins import loaded as loaded_plugins
 from .records import atomic_write_json, atomic_write_text, envelope, read_json
 from .task import get_task, task_id
-
-
-def _nan(x):
-    return float("nan") if x is None else float(x)
 
 
 def comparison_spec(task, controllers, seeds, budget, actuation, params, population,
@@ -89,22 +85,6 @@ def _run_record(out: Path, row: dict) -> dict:
     return run
 
 
-def summarize(runs: list[dict]) -> list[dict]:
-    rows = []
-    for fam in dict.fromkeys(r["family"] for r in runs):
-        rs = [r for r in runs if r["family"] == fam]
-        c = np.array([r["final_cost"] for r in rs])
-        firsts = [r["first_success"] for r in rs if r["first_success"] is not None]
-        rows.append({"controller": fam, "runs": len(rs),
-                     "cost_q25": float(np.percentile(c, 25)), "cost_median": float(np.median(c)),
-                     "cost_q75": float(np.percentile(c, 75)),
-                     "success_rate": float(np.mean([r["success"] for r in rs])),
-                     "runs_with_solver": len(firsts),
-                     "evals_to_success_median": float(np.median(firsts)) if firsts else None,
-                     "wall_s_median": float(np.median([r["wall_s"] for r in rs]))})
-    return rows
-
-
 def table_markdown(rows) -> str:
     # the best by cost need not be a solver: how many runs met one, and when, is a column of its own
     head = ("| controller | runs | best cost median [q25, q75] | success | "
@@ -117,24 +97,6 @@ def table_markdown(rows) -> str:
                      f"[{r['cost_q25']:.3f}, {r['cost_q75']:.3f}] | {100 * r['success_rate']:.0f}% | "
                      f"{ets} | {r['wall_s_median']:.1f} |")
     return "\n".join(lines) + "\n"
-
-
-def _bands(runs, budget, key="curve"):
-    """Per family: (grid, q25, median, q75) of the runs' step curves ``key``."""
-    grid = np.linspace(0, budget, 60)[1:]
-    series = {}
-    for fam in dict.fromkeys(r["family"] for r in runs):
-        ys = []
-        for r in (r for r in runs if r["family"] == fam):
-            e = np.array([p[0] for p in r[key]], dtype=np.float64)
-            b = np.array([_nan(p[1]) for p in r[key]])
-            idx = np.searchsorted(e, grid, side="right") - 1
-            ys.append(np.where(idx >= 0, b[np.clip(idx, 0, None)], np.nan))
-        y = np.array(ys)
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)   # before a run's first point
-            series[fam] = (grid, *np.nanpercentile(y, [25, 50, 75], axis=0))
-    return series
 
 
 def phase_window(task) -> tuple[float, float] | None:

@@ -91,7 +91,7 @@ FORBIDDEN = [
     (("gpmotion.sim", "gpmotion.model", "gpmotion.figures", "gpmotion.controllers"),
      ("gpmotion.gp", "gpmotion.bsr", "gpmotion.task", "gpmotion.families",
       "gpmotion.search", "gpmotion.evaluation", "gpmotion.evaluators", "gpmotion.inprocess",
-      "gpmotion.run", "gpmotion.cli", "gpmotion.compose", "gpmotion.records", "gpmotion.toolbox")),
+      "gpmotion.run", "gpmotion.cli", "gpmotion.compose", "gpmotion.toolbox")),
     (("gpmotion.gp",),
      ("gpmotion.families", "gpmotion.search", "gpmotion.evaluation", "gpmotion.evaluators",
       "gpmotion.inprocess", "gpmotion.run", "gpmotion.cli", "gpmotion.records", "gpmotion.toolbox",

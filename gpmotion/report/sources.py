@@ -44,7 +44,7 @@ def _subtitle(p: dict) -> str:
 def comparison(src: Path) -> tuple[dict, str]:
     """Every family's best run (lowest final cost) side by side; the table and the
     families' median curves of the best under the final weights."""
-    from ..compare import _bands, summarize
+    from ..compare_summary import _bands, summarize
     from ..task import get_task
     d = json.loads((src / "runs.json").read_text(encoding="utf-8"))
     runs = d["runs"]

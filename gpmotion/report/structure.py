@@ -26,8 +26,12 @@ def bsr_rules(family, data: dict) -> dict:
     """One row per rule: its target angles θ₀ and time constants τ per joint and,
     for sense-based rules, the box it answers (centre μ ± half-width λ per sense)."""
     names = [family.task.figure.actuator_names[i] for i in family.actuators]
-    theta, tau = np.atleast_2d(data["theta0"]), np.atleast_2d(data["tau"])
-    head = ["rule"] + [f"θ₀ {n} (°)" for n in names] + [f"τ {n} (s)" for n in names]
+    theta = np.atleast_2d(data["theta0"])
+    # τ is one time constant per rule (a row of R) or one per rule and joint
+    tau = np.asarray(data["tau"], dtype=float).reshape(theta.shape[0], -1)
+    tau_head = ([f"τ {n} (s)" for n in names] if tau.shape[1] == len(names) and tau.shape[1] > 1
+                else ["τ (s)"] * tau.shape[1])
+    head = ["rule"] + [f"θ₀ {n} (°)" for n in names] + tau_head
     mu, lam = data.get("mu"), data.get("lam")
     senses = []
     if mu is not None:
