@@ -51,12 +51,14 @@ STYLE_HELP = """costs and phased style points:
   style terms (arrive early, don't fall, end neutral...).  As in Gritz & Hahn,
   each style term phases in: its weight ramps from 0 to full over a window of
   run progress (generation / generations), so the search first learns the
-  main goal.  While terms phase in, a generation's costs (best, median) are
-  under that generation's weights: "best" can rise although no controller got
-  worse, and "solved" counts the controllers passing the success test.  The
-  final best.json is re-scored with every term at full weight; `gpmotion
-  replay` shows each term's value, weight and phase.  `gpmotion show TASK`
-  lists a task's terms with their phase-in windows.
+  main goal.  The progress line and log.csv show two bests under one name
+  each: "best so far" (column best_so_far) is under that generation's weights,
+  with the generation's median under the same weights beside it, and can rise
+  although no controller got worse; "best final" (column best_final) is the
+  best so far re-scored with every term at full weight, the cost best.json
+  keeps ("–" while not yet known).  "solved" counts the controllers passing the
+  success test.  `gpmotion replay` shows each term's value, weight and phase;
+  `gpmotion show TASK` lists a task's terms with their phase-in windows.
 """
 
 
