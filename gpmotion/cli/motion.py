@@ -33,9 +33,17 @@ def cmd_replay(args):
             family.plot(out / family.plot_file, genome)
 
 
+def _verdict(task, ok: bool) -> str:
+    """SOLVED / not solved with the test's threshold, or that the task has no test."""
+    from ..task import Task
+    if type(task).success is Task.success:
+        return "no success test"
+    threshold = task.success_threshold
+    return ("SOLVED" if ok else "not solved") + (f"  [{threshold}]" if threshold else "")
+
+
 def _print_replay(task, family, actuation, traj, costs, measures, ok):
-    print(f"{task.name} ({family.name}, {actuation}): cost {costs[0]:.4f}  "
-          f"{'SOLVED' if ok[0] else 'not solved'}  [{task.success_threshold}]")
+    print(f"{task.name} ({family.name}, {actuation}): cost {costs[0]:.4f}  {_verdict(task, ok[0])}")
     print(f"  {'term':<16} {'value':>10} {'weight':>8} {'phase':>6} {'contribution':>13}")
     for r in task.breakdown(measures, 0, 1.0):
         print(f"  {r['term']:<16} {r['value']:>10.4f} {r['weight']:>8.3f} {r['phase']:>6.2f} "
