@@ -2,6 +2,7 @@
 missing page or a docstring mkdocstrings cannot render fails the build), and the
 published command-line reference is what the argument parser generates."""
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -52,3 +53,10 @@ def test_site_builds_strict(tmp_path):
         assert (tmp_path / "site" / page).is_file(), page
     # mkdocstrings rendered the API from the docstrings, not an empty page
     assert "register_task" in (tmp_path / "site" / "reference/api/task/index.html").read_text()
+    # docstrings' reST roles (:func:`run`) render as links or code, never as the raw role
+    api = sorted((tmp_path / "site" / "reference" / "api").glob("*/index.html"))
+    raw = {p.parent.name: m.group(0) for p in api
+           if (m := re.search(r":(class|func|meth|mod|data):(`|<code>)", p.read_text()))}
+    assert not raw, raw
+    links = sum(p.read_text().count('autorefs-internal" title="') for p in api)
+    assert links > 0
