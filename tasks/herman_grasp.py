@@ -41,7 +41,7 @@ class HermanGrasp(HermanTask):
     params = {"lift": 0.10, "seconds": 2.0}
     # 36 generations, not 50: the grip forms in the first 0.15 s and lifting
     # is found early; 50 took 89-108 s of main-thread CPU.  5 seeds
-    # each: 5 / 5 at 42 (88-97 s), 5 / 5 at 36 (docs/notes/herman.md)
+    # each: 5 / 5 at 42 (88-97 s), 5 / 5 at 36
     gp_defaults = {**GP_DEFAULTS, "generations": 36}
     bounds = {"lift": (0.0, 0.3)}
     param_docs = {"lift": "how high to lift the ball above its start (m)",
@@ -132,8 +132,7 @@ class HermanGrasp(HermanTask):
 @register_task
 class HermanGraspV2(TrunkCheck, HermanGrasp):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
-    v1's seed 0 did not cross; the check is on every Herman task).
-    docs/notes/herman.md."""
+    v1's seed 0 did not cross; the check is on every Herman task)."""
     version = 2
 
 
@@ -142,6 +141,6 @@ class HermanGraspV3(TrunkCheck, HermanGrasp):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
     trunk.  5 seeds: v2 (charged) 4 / 5, v1's search 5 / 5, whose
-    best controllers never crossed (0.0 cm); docs/notes/herman.md."""
+    best controllers never crossed (0.0 cm)."""
     version = 3
     charge = False

@@ -99,7 +99,7 @@ class HermanPoint(HermanTask):
 class HermanPointV2(TrunkCheck, HermanPoint):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     v1's seed 0 did not cross; the check is on every
-    Herman task).  docs/notes/herman.md."""
+    Herman task)."""
     version = 2
 
 
@@ -108,7 +108,6 @@ class HermanPointV3(TrunkCheck, HermanPoint):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
     trunk.  5 seeds: v2 (charged) 2 / 5, v1's search 4 / 5,
-    whose best controllers crossed at most 0.7 cm (allowed: 1);
-    docs/notes/herman.md."""
+    whose best controllers crossed at most 0.7 cm (allowed: 1)."""
     version = 3
     charge = False

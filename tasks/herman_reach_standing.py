@@ -87,7 +87,7 @@ class HermanReachStandingV2(HermanReachStanding):
     < 2 at 2 ms), and over random arm motions with the pelvis within 5 cm
     the fingertip stays within 8 mm of a 0.5 ms run (test_herman); at 1 ms a
     run could afford 35 generations (3 / 5 in 104-112 s), at 2 ms
-    50 with polish: 5 seeds, 4 / 5 in 62-67 s (docs/notes/herman.md)."""
+    50 with polish: 5 seeds, 4 / 5 in 62-67 s."""
     version = 2
     dt = 2e-3
     record_every = 5
@@ -98,7 +98,7 @@ class HermanReachStandingV2(HermanReachStanding):
 class HermanReachStandingV3(TrunkCheck, HermanReachStandingV2):
     """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     the forearm check found v2's seed 0 with the forearm 8.3 cm
-    into the trunk).  docs/notes/herman.md."""
+    into the trunk)."""
     version = 3
 
 
@@ -115,7 +115,7 @@ class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
     curriculum every seed touched at rest but two struck the trunk hard
     enough at the start to sink the forearm 1.0-1.2 cm into it for an instant
     (3 / 5), which the heavier through term charges.  5 seeds:
-    4 / 5 in 78-100 s of main-thread CPU.  docs/notes/herman.md."""
+    4 / 5 in 78-100 s of main-thread CPU."""
     version = 4
     gp_targets, gp_defaults = NOSE_SEARCH["gp_targets"], NOSE_SEARCH["gp_defaults"]
     terms = tuple(replace(t, param="w_through") if t.name == "through" else t

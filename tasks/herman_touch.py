@@ -160,7 +160,7 @@ class HermanTouchV2(HermanTouch):
     integrates to rest), the last 10 of the 50 generations polish the best,
     and the rest term weighs three times as much (``w_rest``, as
     ``herman_touch_object-v2``'s target 1).  The nose (the default site)
-    keeps ``herman_touch_nose``'s recipe; docs/notes/herman.md."""
+    keeps ``herman_touch_nose``'s recipe."""
     version = 2
     params = {**HermanTouch.params, "w_rest": 3.0}
     param_docs = {**HermanTouch.param_docs,
@@ -195,8 +195,7 @@ class HermanTouchV3(TrunkCheck, HermanTouchV2):
       stays held (``RIGHT_ARM_REACHES``): under v2 both arms were under GP
       and the senses' goal, the site at the neutral pose, drifted as the left
       arm moved (3 / 5).  It is a fixed target on the held body, as the nose
-      is, and takes the nose's recipe (``ANGLE_SITES``).
-    docs/notes/herman.md."""
+      is, and takes the nose's recipe (``ANGLE_SITES``)."""
     version = 3
     RIGHT_ARM_REACHES = ("elbow_l",)    # left-arm sites: tests/test_herman.py
     ANGLE_SITES = ("nose", "elbow_l")
@@ -210,11 +209,10 @@ class HermanTouchV4(SelfContact, HermanTouchV3):
     """v4: the right forearm and hand collide with the trunk and the pelvis
     (``_herman.SelfContact``), and the angle sites' rest term weighs three
     times as much, as ``herman_touch_nose-v3``'s.  5 seeds each
-    (the trials in docs/notes/herman_s17_trials.py: the same cost, scene and
-    GP settings, tested): knee_l 5 / 5 (v3 3 / 5), elbow_l 4 / 5 (v3 2 / 5),
+    (herman_touch-v3 with self-contact and ``w_rest`` 3: the same cost, scene
+    and GP settings, tested): knee_l 5 / 5 (v3 3 / 5), elbow_l 4 / 5 (v3 2 / 5),
     the nose 5 / 5 (the recipe of ``herman_touch_nose-v3``).  A site on the
     trunk is touched with the hand resting on it: the fingertip ends the
-    hand's 3 cm capsule, which the contact holds a few millimetres in.
-    docs/notes/herman.md."""
+    hand's 3 cm capsule, which the contact holds a few millimetres in."""
     version = 4
     ANGLE = {**HermanTouchV3.ANGLE, "w_rest": 3.0}

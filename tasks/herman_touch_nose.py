@@ -24,7 +24,7 @@ class HermanTouchNose(HermanTouch):
     param_docs = {"seconds": "episode length (s)"}
     goal_label = "nose at rest"    # pictures: the scene goal, captioned
     # The last 20 of the 50 generations tune the best controller (--polish; memetic GP):
-    # 5 seeds, 4/5 (10 of 50: 3/5; none: 2/5); docs/notes/herman.md.
+    # 5 seeds, 4/5 (10 of 50: 3/5; none: 2/5).
     gp_defaults = NOSE_SEARCH["gp_defaults"]
 
     @property
@@ -36,7 +36,7 @@ class HermanTouchNose(HermanTouch):
 class HermanTouchNoseV2(TrunkCheck, HermanTouchNose):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     the forearm check found 3 of v1's 4 successes on 5 seeds passing the forearm
-    through the chest, by 1.2, 4.6 and 11.3 cm).  docs/notes/herman.md."""
+    through the chest, by 1.2, 4.6 and 11.3 cm)."""
     version = 2
 
 
@@ -48,8 +48,7 @@ class HermanTouchNoseV3(SelfContact, HermanTouchNoseV2):
     its misses touching but still moving (5.4-5.8 cm/s) or short at rest;
     the rest term x3 alone solved 3 / 5; with self-contact as
     well, 5 / 5 (the trial ``herman_touch`` site=nose with
-    SelfContact and w_rest 3: the same cost, scene and GP settings, tested).
-    docs/notes/herman.md."""
+    SelfContact and w_rest 3: the same cost, scene and GP settings, tested)."""
     version = 3
     terms = tuple(replace(t, weight=3.0 * t.weight) if t.name == "rest" else t
                   for t in HermanTouchNoseV2.terms)

@@ -47,11 +47,11 @@ class HermanTouchObject(HermanTask):
     # The trees drive their joints' target *rates* (gpmotion.gp.bytecode.TargetLaw):
     # a tree of the fingertip's error then settles on the object, where an angle
     # target settles short by the servo's sag.  5 seeds each: target 0
-    # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5); docs/notes/herman.md.
+    # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5).
     gp_targets = "rate"
     # The last 10 of the 50 generations tune the best controller (--polish; memetic GP):
     # 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
-    # 20 of 50: 3, 3, 4; target 1 with the limits term: 3); docs/notes/herman.md.
+    # 20 of 50: 3, 3, 4; target 1 with the limits term: 3).
     gp_defaults = {**GP_DEFAULTS, "polish": 10}
     preset_weights: ClassVar[dict] = {}      # preset -> its own default term weights (v2)
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
@@ -132,7 +132,7 @@ class HermanTouchObjectV2(HermanTouchObject):
     faster than the rest rule allows (5.4 and 13.4 cm/s).  The rest term three
     times as heavy settles them: 4 / 5.  Targets 0 and 2 solve on
     poses with joints on their limits, so they keep v1's weights (charged the
-    same they solved 2 / 3 and 0 / 3); docs/notes/herman.md."""
+    same they solved 2 / 3 and 0 / 3)."""
     version = 2
     preset_weights = {1: {"w_limits": 2.0, "w_rest": 3.0}}
 
@@ -141,7 +141,7 @@ class HermanTouchObjectV2(HermanTouchObject):
 class HermanTouchObjectV3(TrunkCheck, HermanTouchObjectV2):
     """v3: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     the forearm check found v2's seed 0 on target 0 with the forearm 8.0 cm
-    into the belly, on target 1 5.8 cm).  docs/notes/herman.md."""
+    into the belly, on target 1 5.8 cm)."""
     version = 3
 
 
@@ -155,7 +155,7 @@ class HermanTouchObjectV4(HermanTouchObjectV3):
     targets: 2 / 5).  Targets 0 and 2 keep v3's search, without
     self-contact: with it and rate targets they solved 4 / 5 and 3 / 5,
     with angle targets and polish 20 0 / 2 and 0 / 2 (stopped), against
-    v3's 5 / 5 and 5 / 5.  docs/notes/herman.md."""
+    v3's 5 / 5 and 5 / 5."""
     version = 4
     CONTACT_PRESETS = (1,)           # the presets on the nose's recipe
     RECIPE = NOSE_SEARCH

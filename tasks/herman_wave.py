@@ -122,7 +122,7 @@ class HermanWave(HermanTask):
 class HermanWaveV2(TrunkCheck, HermanWave):
     """v2: the right forearm may not cross the trunk (``_herman.TrunkCheck``;
     v1's seed 0 touched it, 0.7 cm, within the allowance;
-    the check is on every Herman task).  docs/notes/herman.md."""
+    the check is on every Herman task)."""
     version = 2
 
 
@@ -131,7 +131,6 @@ class HermanWaveV3(TrunkCheck, HermanWave):
     """v3: the forearm check judged, not charged (``TrunkCheck.charge``): the
     cost and the search are v1's, success also needs the forearm out of the
     trunk.  5 seeds: v2 (charged) 1 / 5, v1's search 5 / 5,
-    whose best controllers crossed at most 0.7 cm (allowed: 1);
-    docs/notes/herman.md."""
+    whose best controllers crossed at most 0.7 cm (allowed: 1)."""
     version = 3
     charge = False

@@ -599,7 +599,7 @@ def _assert_same_search_with_self_contact(new, trial):
 @pytest.mark.parametrize("site", ["knee_l", "elbow_l", "nose"])
 def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     """herman_touch-v4 runs the searches its rates were measured with
-    (docs/notes/herman_s17_trials.py: herman_touch-v3 with
+    (herman_touch-v3 with
     SelfContact, --param w_rest=3): the same terms at the same effective
     weights, scene (with the four contact pairs), GP settings, joints and
     senses; the sites keep v3's recipes (angle on the nose and left elbow,
@@ -635,7 +635,7 @@ def test_touch_object_v4_is_the_trial_its_target_1_rate_was_measured_on():
 def test_touch_nose_v3_is_the_self_contact_trial():
     """herman_touch_nose-v3 runs the search its rate was measured with:
     herman_touch-v3 on the nose with w_rest 3 and Herman's forearm and hand
-    colliding with the trunk and the pelvis (docs/notes/herman_s17_trials.py):
+    colliding with the trunk and the pelvis:
     the same terms at the same effective weights and phases, scene, GP
     settings, joints and senses."""
     new = get_task("herman_touch_nose")
@@ -647,8 +647,8 @@ def test_touch_nose_v3_is_the_self_contact_trial():
 
 def test_reach_standing_v4_is_v3_with_the_nose_recipe_and_a_travelling_object():
     """herman_reach_standing-v4 = v3 with self-contact, angle targets, polish
-    20, the rest and through terms x3 (the search whose rate
-    docs/notes/herman.md records), plus the curriculum: the
+    20, the rest and through terms x3 (the search its 4 / 5 was
+    measured with), plus the curriculum: the
     object starts at START (pelvis frame) and travels in a line to its place
     over EASE of the run; travel_start=1 keeps it in place."""
     from gpmotion.tasks.herman_reach_standing import EASE, START
