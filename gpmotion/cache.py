@@ -20,6 +20,7 @@ when set, still decides where numba's own cache goes.
 from __future__ import annotations
 
 import ast
+import contextlib
 import functools
 import hashlib
 import importlib.util
@@ -114,6 +115,35 @@ def configure_numba() -> None:
 
 
 _OURS = "GPMOTION_NUMBA_CACHE_DIR"
+
+
+_COLD: list = []          # listeners told before a kernel compiles for the first time
+
+
+@contextlib.contextmanager
+def on_cold_compile(listener):
+    """While in the block, ``listener(path)`` is called before the generated kernel
+    module at ``path`` is first imported when numba's cache holds no index for it:
+    its compilation is about to take minutes (a run says so)."""
+    _COLD.append(listener)
+    try:
+        yield listener
+    finally:
+        _COLD.remove(listener)
+
+
+def numba_indexed(path: str | Path) -> bool:
+    """Whether numba's cache has an index (``<module>.<function>-<line>.*.nbi``)
+    for a function of the module file at ``path``: compiled here before."""
+    root = os.environ.get("NUMBA_CACHE_DIR") or str(machine_dir() / "numba")
+    return any(Path(root).glob(f"*/{Path(path).stem}.*.nbi"))
+
+
+def announce_compile(path: str | Path) -> None:
+    """Tell the listeners (:func:`on_cold_compile`) when ``path`` compiles cold."""
+    if _COLD and not numba_indexed(path):
+        for listener in list(_COLD):
+            listener(path)
 
 
 def cache_dir() -> Path:

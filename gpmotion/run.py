@@ -11,7 +11,6 @@ a config and a log from different runs are never mixed.
 """
 from __future__ import annotations
 
-import math
 import os
 import platform
 import signal
@@ -22,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from .inprocess import spec_of
+from .progress import CompileNote, Progress, last_generation
+from .bsr.genome import MAX_RULES
 from .version import __version__
 from .families import make_family, recorded_options
 from .records import ConfigError, FormatError, validate_number
@@ -33,7 +34,6 @@ from .task import Task, get_task, task_id
 __all__ = ["RunConfig", "build", "run", "controller_record", "write_best", "Stopped"]
 
 CHECKPOINT_EVERY_S = 10.0
-MAX_RULES = 1000            # the paper uses R = 10; 10^7 rules would exhaust memory mid-run
 
 
 class Stopped(KeyboardInterrupt):
@@ -75,62 +75,6 @@ def _evaluator(cfg, task, family, actuation, backend=None):
 
 # ------------------------------------------------------------------ progress
 
-class Progress:
-    """Progress on stderr: one rewritten line on a terminal, plain lines otherwise,
-    at most one every ``every`` seconds (a serial round takes milliseconds)."""
-
-    def __init__(self, total: int, quiet: bool = False, every: float = 1.0):
-        self.total, self.quiet, self.every = total, quiet, every
-        self.t0 = time.perf_counter()
-        self.evals = 0
-        self.tty = sys.stderr.isatty()
-        self._shown = -math.inf
-        self._first = None            # (time, generation) after the first generation: no compile
-
-    def eta(self, gen: int, now: float) -> str:
-        """From the pace since the first generation, once 3 more are done and 2 s passed."""
-        if self._first is None:
-            self._first = (now, gen)
-            return "eta …"
-        t1, g1 = self._first
-        if gen - g1 < 3 or now - t1 < 2.0:
-            return "eta …"
-        eta = (now - t1) / (gen - g1) * max(0, self.total - gen)
-        return f"eta {eta:,.0f}s"
-
-    def update(self, gen: int, ev, best: float, row: dict | None = None):
-        self.evals += len(ev.costs)
-        if self.quiet:
-            return
-        now = time.perf_counter()
-        eta = self.eta(gen, now)
-        last = gen >= self.total
-        if now - self._shown < self.every and not last:
-            return
-        self._shown = now
-        el = now - self.t0
-        rate = self.evals / el if el > 0 else 0.0
-        line = (f"gen {gen:>4}/{self.total}  {_bests(row, best, ev)}  "
-                f"solved {int(ev.success.sum())}/{len(ev.costs)}  failed {int(ev.failed.sum())}  "
-                f"{rate:,.0f} evals/s  {eta}")
-        if self.tty:
-            print("\r" + line + "\033[K", end="\n" if last else "", file=sys.stderr, flush=True)
-        else:
-            print(line, file=sys.stderr, flush=True)
-
-
-def _bests(row: dict | None, best: float, ev) -> str:
-    """The log row's numbers under its names: ``best so far`` and the median beside
-    it under the current weights, ``best final`` under the final weights (– while
-    unknown: a curriculum's scene is not final yet)."""
-    row = row or {}
-    now = row.get("best_so_far", best)
-    median = row.get("gen_median", np.median(ev.costs))
-    final = row.get("best_final")
-    final_s = "–" if final in (None, "") else f"{float(final):.4f}"
-    return f"best so far {float(now):.4f} (median {float(median):.4f})  best final {final_s}"
-
-
 def _shown(params: dict) -> dict:
     """Task parameters as the banner shows them: a figure variant (a whole
     spec) by its name."""
@@ -148,7 +92,7 @@ def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDi
     own = "" if cfg.actuation else f", {family.name}'s default"
     note = family.banner_note()
     act = (f"  actuation: {actuation}{own}{' · ' + note if note else ''} · "
-           f"{search.total:,} generations")
+           f"generations 0–{last_generation(search):,}")
     return "\n".join([head, act, "  " + phase_line(task, search)])
 
 
@@ -279,7 +223,8 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
             print(banner(cfg, task, family, search, actuation, rd, verb), file=sys.stderr)
         if evaluator is None:
             evaluator = _evaluator(cfg, task, family, actuation, backend)
-        _loop(evaluator, search, rec, quiet, max_generations)
+        with _compile_note(task, quiet):
+            _loop(evaluator, search, rec, quiet, max_generations)
         if search.done:
             _finish(rd, cfg, task, family, actuation, search, artifacts)
     finally:
@@ -290,6 +235,16 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
             if rd is not None:
                 rd.close()
     return search.best, search.best_cost, rd
+
+
+def _compile_note(task, quiet: bool):
+    """A note on stderr before a kernel compiles cold (minutes, once per machine)."""
+    import contextlib
+    from .cache import on_cold_compile
+    if quiet:
+        return contextlib.nullcontext()
+    fig = task.figure
+    return on_cold_compile(CompileNote(getattr(fig, "name", None) or str(fig)))
 
 
 def _keep_legacy_noisy(rd: RunDir, cfg) -> None:
@@ -462,7 +417,7 @@ def _short(x) -> str:
 
 def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
     """ask → evaluate → tell → log row; checkpoint when due, at the end, on a signal."""
-    prog = Progress(search.total, quiet)
+    prog = Progress(last_generation(search), quiet)
     t0 = time.perf_counter() - getattr(rec, "elapsed0", 0.0)
     stop = {"sig": None}
 
@@ -492,7 +447,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             done_now += 1
             if search.done or stop["sig"] is not None or rec.due():
                 rec.flush(search, time.perf_counter() - t0)
-            prog.update(search.generation, ev, search.best_cost, row)
+            prog.update(row["generation"], ev, search.best_cost, row)
     except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
         if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
             raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.current_path}` "

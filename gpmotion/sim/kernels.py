@@ -81,5 +81,6 @@ def kernel_for(control_module: str, backend: str):
     if memo not in _KERNELS:
         path = cache.write_module(f"rollout_{kernel_key(control_module, backend)}",
                                   episode_source(control_module, backend))
+        cache.announce_compile(path)             # minutes, the first time: say so
         _KERNELS[memo] = cache.import_file(path)
     return _KERNELS[memo]

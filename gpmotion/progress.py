@@ -1,0 +1,108 @@
+"""What a run prints while it searches: one progress line per generation (at most
+one a second), with the log row's numbers under the log's names, and a note
+before a kernel compiles for the first time on this machine.
+
+Generations are numbered as log.csv numbers them, from 0 (the first population
+or working set) for every controller family.  ``evals/s`` is the recent rate
+(over the last few seconds), not an average since the start, which the first
+generation's compilation would drag down for the whole run.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections import deque
+
+import numpy as np
+
+RATE_WINDOW_S = 5.0          # evals/s is measured over about this much recent time
+
+
+def last_generation(search) -> int:
+    """The number log.csv gives the search's last generation: a generational
+    search's G generations are 0..G-1; a serial search's G rounds follow its
+    initial working set (generation 0), so they end at G."""
+    from .search.base import GenerationalSearch
+    return search.total - 1 if isinstance(search, GenerationalSearch) else search.total
+
+
+class Progress:
+    """Progress on stderr: one rewritten line on a terminal, plain lines otherwise,
+    at most one every ``every`` seconds (a serial round takes milliseconds).
+    ``last``: the number of the last generation (:func:`last_generation`)."""
+
+    def __init__(self, last: int, quiet: bool = False, every: float = 1.0):
+        self.total, self.quiet, self.every = last, quiet, every
+        self.t0 = time.perf_counter()
+        self.evals = 0
+        self.tty = sys.stderr.isatty()
+        self._shown = -math.inf
+        self._first = None            # (time, generation) after the first generation: no compile
+        self._recent = deque([(self.t0, 0)])     # (time, evaluations so far)
+
+    def eta(self, gen: int, now: float) -> str:
+        """From the pace since the first generation, once 3 more are done and 2 s passed."""
+        if self._first is None:
+            self._first = (now, gen)
+            return "eta …"
+        t1, g1 = self._first
+        if gen - g1 < 3 or now - t1 < 2.0:
+            return "eta …"
+        eta = (now - t1) / (gen - g1) * max(0, self.total - gen)
+        return f"eta {eta:,.0f}s"
+
+    def rate(self, now: float) -> float:
+        """Evaluations per second over the last ``RATE_WINDOW_S`` (at least the
+        last generation), from the samples ``update`` keeps."""
+        self._recent.append((now, self.evals))
+        while len(self._recent) > 2 and now - self._recent[0][0] > RATE_WINDOW_S:
+            self._recent.popleft()
+        (t_a, n_a), (t_b, n_b) = self._recent[0], self._recent[-1]
+        return (n_b - n_a) / (t_b - t_a) if t_b > t_a else 0.0
+
+    def update(self, gen: int, ev, best: float, row: dict | None = None):
+        """After a generation: ``gen`` its number (the log row's ``generation``)."""
+        self.evals += len(ev.costs)
+        if self.quiet:
+            return
+        now = time.perf_counter()
+        eta = self.eta(gen, now)
+        rate = self.rate(now)
+        last = gen >= self.total
+        if now - self._shown < self.every and not last:
+            return
+        self._shown = now
+        line = (f"gen {gen:>4}/{self.total}  {bests(row, best, ev)}  "
+                f"solved {int(ev.success.sum())} of {len(ev.costs)} evaluated  "
+                f"failed {int(ev.failed.sum())}  {rate:,.0f} evals/s  {eta}")
+        if self.tty:
+            print("\r" + line + "\033[K", end="\n" if last else "", file=sys.stderr, flush=True)
+        else:
+            print(line, file=sys.stderr, flush=True)
+
+
+def bests(row: dict | None, best: float, ev) -> str:
+    """The log row's numbers under its names: ``best so far`` and the median beside
+    it under the current weights, ``best final`` under the final weights (– while
+    unknown: a curriculum's scene is not final yet)."""
+    row = row or {}
+    now = row.get("best_so_far", best)
+    median = row.get("gen_median", np.median(ev.costs))
+    final = row.get("best_final")
+    final_s = "–" if final in (None, "") else f"{float(final):.4f}"
+    return f"best so far {float(now):.4f} (median {float(median):.4f})  best final {final_s}"
+
+
+class CompileNote:
+    """Prints, once per kernel, that a kernel is compiling for the first time on this
+    machine (numba has no cache index for it yet): the first generation then takes
+    minutes, not seconds.  A listener of :func:`gpmotion.cache.on_cold_compile`."""
+
+    def __init__(self, what: str):
+        self.what = what
+
+    def __call__(self, path) -> None:
+        from .cache import machine_dir
+        print(f"compiling the {self.what} kernels (about 1-4 min the first time on this "
+              f"machine; cached after, in {machine_dir()})", file=sys.stderr, flush=True)

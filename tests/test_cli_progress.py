@@ -1,0 +1,83 @@
+"""The progress line says what it means: generations numbered as log.csv numbers them
+(from 0, every family), a recent evals/s, what `solved` counts among, and a note
+before a kernel compiles for the first time."""
+import csv
+import re
+
+import numpy as np
+import pytest
+
+from gpmotion import cache
+from gpmotion.cli import main
+from gpmotion.evaluation import Evaluation
+from gpmotion.progress import Progress
+
+LINE = re.compile(r"gen\s+(\d+)/(\d+) .* solved (\d+) of (\d+) evaluated")
+
+
+def ev(n=4):
+    return Evaluation(np.arange(n, dtype=float), np.zeros(n, bool), np.zeros(n, bool), {})
+
+
+def test_evals_per_second_is_the_recent_rate_not_the_average_since_the_start():
+    p = Progress(100)
+    p.t0 = 0.0
+    p._recent[0] = (0.0, 0)
+    p.evals = 8
+    assert p.rate(100.0) == pytest.approx(0.08)     # the first generation compiled for 100 s
+    for k in range(1, 11):                          # then 100 evaluations a second
+        p.evals += 100
+        rate = p.rate(100.0 + k)
+    assert rate == pytest.approx(100.0)
+
+
+def _gens(err: str):
+    return [tuple(int(x) for x in m.groups()) for m in map(LINE.search, err.splitlines()) if m]
+
+
+@pytest.mark.parametrize("family, budget", [
+    ("gp", ["--population", "8", "--generations", "3"]),
+    ("bsr-sense", ["--working", "2", "--generations", "3"]),
+])
+def test_generations_are_numbered_as_the_log_numbers_them(family, budget, tmp_path, capsys):
+    out = tmp_path / family
+    assert main(["run", "lamp_hop", "--controller", family, "--out", str(out),
+                 "--param", "seconds=0.2", "--no-artifacts", *budget]) == 0
+    err = capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "log.csv")))
+    gens = _gens(err)
+    assert gens[0][0] == 0 == int(rows[0]["generation"])       # every family counts from 0
+    assert gens[-1][0] == gens[-1][1] == int(rows[-1]["generation"])
+    assert f"generations 0–{rows[-1]['generation']}" in err
+    assert all(k <= n for _, _, k, n in gens)
+
+
+def test_a_cold_kernel_is_announced_before_it_compiles(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(cache, "numba_indexed", lambda path: False)    # as on a fresh machine
+    monkeypatch.setattr("gpmotion.sim.kernels._KERNELS", {})
+    assert main(["run", "lamp_hop", "--out", str(tmp_path / "r"), "--param", "seconds=0.2",
+                 "--population", "4", "--generations", "1", "--no-artifacts"]) == 0
+    err = capsys.readouterr().err
+    assert "compiling the lamp kernels" in err
+    assert err.index("compiling the lamp kernels") < err.index("gen ")
+
+
+def test_a_warm_kernel_is_not_announced(tmp_path, capsys):
+    assert main(["run", "lamp_hop", "--out", str(tmp_path / "r"), "--param", "seconds=0.2",
+                 "--population", "4", "--generations", "1", "--no-artifacts"]) == 0
+    assert "compiling" not in capsys.readouterr().err
+
+
+def test_numba_index_files_tell_a_compiled_module(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    module = tmp_path / "kernels" / "rollout_abc.py"
+    assert not cache.numba_indexed(module)
+    (tmp_path / "kernels_1234").mkdir()
+    (tmp_path / "kernels_1234" / "rollout_abc.rollout-12.py311.nbi").write_bytes(b"")
+    assert cache.numba_indexed(module)
+    heard = []
+    with cache.on_cold_compile(heard.append):
+        cache.announce_compile(module)                   # warm: nothing said
+        cache.announce_compile(tmp_path / "rollout_new.py")
+    cache.announce_compile(tmp_path / "rollout_other.py")   # nobody listening
+    assert heard == [tmp_path / "rollout_new.py"]
