@@ -46,8 +46,8 @@ class RexTurnV3(RexTurnV2):
     """v3: the heading change pays up to ``target_degrees``, each radian past
     it costs ``w_over`` and the yaw rate over the motion's last 0.25 s costs
     ``w_spin`` per rad/s, so the second walk starts from a settled turn.
-    Success is v2's.  (It is the plugin ``rex_turn_settled`` shipped:
-    with it the walk → turn → walk sequence completed on 2 of 5 seeds.)"""
+    Success is v2's.  With it the walk → turn → walk sequence completes on
+    2 of 5 seeds."""
     version = 3
     description = "Rex turns by about 90° and stops turning, without falling"
     params = {**RexTurnV2.params, "target_degrees": 90.0, "w_over": 1.0, "w_spin": 0.5}
