@@ -78,11 +78,25 @@ def test_no_tracked_file_is_named_by_session(tracked):
     assert not [n for n in tracked if SESSION_NAME.search(n)]
 
 
-def test_no_research_notes_folder(tracked):
-    """Research data lives with its study (gpmotion/studies/NAME) or beside the test
-    that reads it; docs/ holds the site's pages and pictures."""
-    notes = [n for n in tracked if n.startswith("docs/notes/")]
-    assert not notes, f"{len(notes)} files under docs/notes/, e.g. {notes[:5]}"
+def test_docs_holds_no_research_notes_that_nothing_reads(tracked):
+    """Research data lives with its study (gpmotion/studies/NAME) or beside the
+    test that reads it, and what no table, test or page uses is removed: a file
+    left under docs/notes/ must be named, folder and file, by a test or a
+    benchmark that still reads it (until its study takes it)."""
+    readers = "\n".join((ROOT / n).read_text(encoding="utf-8") for n in tracked
+                         if n.endswith(".py") and n.startswith(("tests/", "benchmarks/"))
+                         and not n.endswith("test_no_history.py"))
+
+    def read(name):
+        folder, _, file = name.removeprefix("docs/notes/").rpartition("/")
+        if not folder:
+            return name in readers
+        stem = file.rsplit(".", 1)[0]
+        named = f'"notes" / "{folder}"' in readers or f"docs/notes/{folder}/" in readers
+        return named and (f'"{file}"' in readers or f'"{stem}' in readers)
+
+    unread = [n for n in tracked if n.startswith("docs/notes/") and not read(n)]
+    assert not unread, f"{len(unread)} files under docs/notes/ that nothing reads, e.g. {unread[:5]}"
 
 
 def test_no_commit_hash_given_as_history(tracked):
