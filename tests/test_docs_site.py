@@ -60,3 +60,24 @@ def test_site_builds_strict(tmp_path):
     assert not raw, raw
     links = sum(p.read_text().count('autorefs-internal" title="') for p in api)
     assert links > 0
+
+
+def test_docstring_roles_become_autorefs_to_the_object_they_name():
+    """docs/_griffe/roles.py: a short name resolves in the docstring's own scope,
+    ``~`` shows the last part, an explicit title is kept, an import is followed
+    to what it names."""
+    import importlib.util
+    import griffe
+    path = ROOT / "docs" / "_griffe" / "roles.py"
+    spec = importlib.util.spec_from_file_location("gpmotion_docs_roles", path)
+    roles = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(roles)
+    pkg = griffe.load("gpmotion", extensions=griffe.load_extensions(f"{path}:SphinxRoles"),
+                      search_paths=[str(ROOT)])
+    text = pkg["task"].docstring.value
+    assert ":class:" not in text and ":func:" not in text
+    assert '<autoref identifier="gpmotion.model.Figure" optional><code>Figure</code></autoref>' in text
+    assert '<autoref identifier="gpmotion.task.task_id" optional><code>task_id</code></autoref>' in text
+    assert roles.convert(pkg["task"], ":func:`the runner <gpmotion.run.run>`") == (
+        '<autoref identifier="gpmotion.run.run" optional><code>the runner</code></autoref>')
+    assert roles.resolve(pkg["task"]["Task"], "register_task") == "gpmotion.task.register_task"
