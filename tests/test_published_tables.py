@@ -42,5 +42,7 @@ def test_a_shipped_ledger_was_run_from_its_shipped_spec(name):
     for r in rows:
         assert (SHIPPED / name / r["controller"]).is_file()
         assert r["seeds"] == spec.seed_set(r["seed"])
-        assert r["seeds"] == "tune" or "imported" not in r   # report rows come from real runs
+        # report rows come from real runs: the driver's, or a run script's record of the
+        # same configuration and seed (tests/test_gaits_ledger.py replays each to its cost)
+        assert r["seeds"] == "tune" or r.get("imported", "benchmarks/").startswith("benchmarks/")
     assert rows == read_rows(SHIPPED / name)
