@@ -49,7 +49,7 @@ def load_controller(path: str | Path):
     require(rec.get("plugins"), str(path))
     try:
         params = _after_from(dict(rec.get("params", {})), path.parent)
-        task = get_task(task_id(str(rec["task"]), recorded=True), **params)
+        task = _recorded_task(rec, params)
         options = recorded_options(str(rec["family"]), rec.get("options"), rec.get("options"))
         family = make_family(str(rec["family"]), task, **options)
         genome = family.from_json(rec["genome"])
@@ -59,3 +59,16 @@ def load_controller(path: str | Path):
     except ValueError as e:
         raise FormatError(f"{path}: {e}") from None
     return task, family, actuation, genome, rec
+
+
+def _recorded_task(rec: dict, params: dict):
+    """The record's task; an unknown one says where a task comes from."""
+    name = str(rec["task"])
+    try:
+        return get_task(task_id(name, recorded=True), **params)
+    except KeyError as e:
+        hint = ("; the record names no plugin folder: the task was registered by the program "
+                "that made it -- pass --plugins DIR with a folder whose gpmotion-plugin.toml "
+                "names the task's file (examples/ holds one for examples/custom_task.py)"
+                if not rec.get("plugins") else "")
+        raise FormatError(f"{e.args[0] if e.args else name}{hint}") from None   # the caller names path
