@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .common import _activate_plugins
+from .runs import refuse_series
 
 
 def cmd_replay(args):
@@ -13,6 +14,7 @@ def cmd_replay(args):
     from ..compose import playback                       # a composite file: its phases in series
     if playback.is_composite(args.source):
         return playback.replay(args)
+    refuse_series(Path(args.source), "replay")
     task, family, actuation, genome, _ = load_controller(args.source)
     traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
     if args.json:
@@ -77,6 +79,7 @@ def cmd_render(args):
         title, task = f"{fig.name}: holding its neutral pose", None
     else:
         from ..replay import load_controller, replay_genome
+        refuse_series(Path(args.source), "render")
         task, family, actuation, genome, _ = load_controller(args.source)
         traj = replay_genome(task, family, actuation, genome)[0]
         title = f"{task.name} ({family.name})"
@@ -96,6 +99,7 @@ def cmd_export(args):
     from ..compose import playback
     if playback.is_composite(args.source):
         return playback.export_command(args)
+    refuse_series(Path(args.source), "export")
     task, family, actuation, genome, _ = load_controller(args.source)
     traj = replay_genome(task, family, actuation, genome)[0]
     n = write_bvh(args.bvh, traj, scale=args.scale)

@@ -28,7 +28,8 @@ def _add_run_args(p):
     p.add_argument("--param", "--set", action="append", metavar="KEY=VALUE",
                    help="task parameter (gpmotion show TASK); a number's VALUE may be a comma list to "
                         "run a series (a text parameter such as after= takes the list as its value)")
-    p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN)")
+    p.add_argument("--out", help="run directory (default runs/TASK-CONTROLLER-seedN, "
+                   "runs/TASK-CONTROLLER-PRESET-seedN with --preset)")
     p.add_argument("--force", action="store_true", help="move an existing run directory aside")
     p.add_argument("--resume", action="store_true", help="continue an existing run directory")
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
@@ -115,7 +116,8 @@ def _out_dir(args, seed, key, value) -> Path:
         p = Path(args.out)
         p = p / f"{key}={value}" if key else p
         return p / f"seed{seed}" if args.seeds > 1 else p
-    p = Path("runs") / f"{args.task}-{args.controller}-seed{seed}"
+    preset = f"-{args.preset}" if args.preset else ""     # a preset's run beside the default's
+    p = Path("runs") / f"{args.task}-{args.controller}{preset}-seed{seed}"
     return p / f"{key}={value}" if key else p
 
 
@@ -168,7 +170,7 @@ def _summary(rd):
 
 def cmd_resume(args):
     from ..run import run
-    _refuse_series(Path(args.run_dir))
+    refuse_series(Path(args.run_dir), "resume")
     _activate_plugins(args)
     backend = _backend(args)
     if args.workers is not None or args.scheduler is not None:
@@ -178,15 +180,16 @@ def cmd_resume(args):
     _summary(rd)
 
 
-def _refuse_series(path: Path):
-    """A series folder (--seeds K, --param k=a,b) holds runs, not a config: name them."""
-    if (path / "config.json").exists() or not path.is_dir():
+def refuse_series(path: Path, verb: str):
+    """A series folder (--seeds K, --param k=a,b) holds runs, not a config or a
+    best.json: name them, each with the command ``verb`` (resume, replay...)."""
+    if (path / "config.json").exists() or (path / "best.json").exists() or not path.is_dir():
         return
     runs = sorted(str(c.parent) for c in path.glob("**/config.json"))
     if runs:
         more = f" (and {len(runs) - 3} more)" if len(runs) > 3 else ""
-        raise ValueError(f"{path} is a series of {len(runs)} runs; resume each: "
-                         + ", ".join(f"gpmotion resume {r}" for r in runs[:3]) + more)
+        raise ValueError(f"{path} is a series of {len(runs)} runs; {verb} each: "
+                         + ", ".join(f"gpmotion {verb} {r}" for r in runs[:3]) + more)
 
 
 def _add_robust_arguments(p) -> None:
