@@ -14,14 +14,19 @@
     return u;
   }
   const f32 = (b64) => new Float32Array(bytes(b64).buffer);
+  function q16(o) {                           // 16-bit positions over their range (encode.q16)
+    const v = new Int16Array(bytes(o.q).buffer), out = new Float32Array(v.length);
+    for (let i = 0; i < v.length; i++) out[i] = o.lo + (v[i] + 32767) * o.step;
+    return out;
+  }
 
   function decode(m) {
     if (m._d) return m._d;
-    const d = { dims: m.dims, n: m.n, nseg: m.n_seg, times: f32(m.times), segs: f32(m.segs),
+    const d = { dims: m.dims, n: m.n, nseg: m.n_seg, times: f32(m.times), segs: q16(m.segs),
                 radii: m.radii, events: m.events || [], phases: m.phases || null };
-    if (m.contacts) { d.contacts = f32(m.contacts); d.nc = m.n_contacts; d.touching = bytes(m.touching); }
-    if (m.points) { d.points = f32(m.points); d.np = m.point_names.length; }
-    if (m.ball) d.ball = { r: m.ball.r, xyz: f32(m.ball.xyz), held: bytes(m.ball.held) };
+    if (m.contacts) { d.contacts = q16(m.contacts); d.nc = m.n_contacts; d.touching = bytes(m.touching); }
+    if (m.points) { d.points = q16(m.points); d.np = m.point_names.length; }
+    if (m.ball) d.ball = { r: m.ball.r, xyz: q16(m.ball.xyz), held: bytes(m.ball.held) };
     m._d = d;
     return d;
   }
@@ -399,11 +404,13 @@
                generation: e ? e.generation : null, cost: e ? e.cost_final : this.panel.cost, dims: this.d.dims,
                camera: this.camera.position.toArray() };
     }
-    points() {                                  // the drawn frame's segment ends, in the data's coordinates
-      const d = this.d, f = this.frame, out = [];
-      for (let s = 0; s < d.nseg; s++) {
-        const ends = [0, 1].map((k) => { const p = this.end(d, f, s, k); return d.dims === 3 ? [p.x, p.y, p.z] : [p.x, p.z]; });
-        out.push(ends);
+    points() {                                  // the drawn capsules' ends (from the meshes), in the data's coordinates
+      const out = [], up = new THREE.Vector3(0, 1, 0);
+      for (const m of this.caps) {
+        const half = (m.geometry.parameters.length || 0) / 2;
+        const axis = up.clone().applyQuaternion(m.quaternion).multiplyScalar(half);
+        const ends = [m.position.clone().sub(axis), m.position.clone().add(axis)];
+        out.push(ends.map((p) => (this.d.dims === 3 ? [p.x, p.y, p.z] : [p.x, p.z])));
       }
       return out;
     }

@@ -6,6 +6,7 @@ reports without the film, and says so.
 """
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -18,7 +19,8 @@ from .encode import encode_motion
 from .structure import controller_view
 
 FILM_FPS = 25.0                  # the film's frame rate (the best motion keeps every frame)
-FILM_BYTES = 2_000_000           # the film's share of a page: entries are thinned to fit
+FILM_BYTES = 800_000             # the film's share of a page: entries are thinned to fit
+                                 # (a lamp page stays under 2 MB, a Herman page under 5 MB)
 
 
 def _num(x):
@@ -78,7 +80,7 @@ def film(records, task, family, actuation, budget: int = FILM_BYTES) -> dict:
     traj = ev.rollout(genomes)
     costs, _, ok = task.score(traj, 1.0)
     one = encode_motion(traj, 0, task=task, fps=FILM_FPS, details=False)
-    per = max(1, len(one["segs"]))
+    per = max(1, len(json.dumps(one)))
     keep = max(2, budget // per)
     chosen = thin(list(range(len(records))), keep)
     entries = []

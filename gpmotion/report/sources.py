@@ -50,12 +50,17 @@ def comparison(src: Path) -> tuple[dict, str]:
     runs = d["runs"]
     task = get_task(d["task"], **dict(d.get("params") or {}))
     panels = []
-    for fam in dict.fromkeys(r["family"] for r in runs):
+    families = list(dict.fromkeys(r["family"] for r in runs))
+    for fam in families:
         mine = [r for r in runs if r["family"] == fam]
         r = min(mine, key=lambda r: r["final_cost"])
-        p = _controller_panel(src / "best" / f"{fam}-seed{r['seed']}.json", task)
+        run_dir = src / "runs" / f"{fam}-seed{r['seed']}"
+        if (run_dir / "best.json").is_file() and (run_dir / "config.json").is_file():
+            p = run_panel(run_dir, film_bytes=FILM_BYTES // len(families))
+        else:                       # an older comparison kept only the controllers
+            p = _controller_panel(src / "best" / f"{fam}-seed{r['seed']}.json", task)
+            p["film_note"] = "this comparison kept no run folders: no film of the generations"
         p["name"] = f"{fam}: its best of {len(mine)} seeds (seed {r['seed']})"
-        p["film_note"] = "a comparison keeps no per-generation record: no film"
         panels.append(p)
     series = []
     colors = ["#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b"]
