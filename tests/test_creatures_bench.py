@@ -52,19 +52,21 @@ def test_multistart_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert len(err) == 2 and all(line.startswith("creatures_3d.py: ") for line in err)
 
 
+SEQ = ROOT / "gpmotion" / "studies" / "creatures" / "controllers" / "rex-sequence-seed0-{}.json"
+
+
 def test_judge_gives_the_recorded_sequence_its_verdict(capsys):
-    """A recorded completed walk → turn → walk, judged from its saved controllers."""
+    """A completed walk → turn → walk of the creatures study, judged from its controllers."""
     import json
-    d = ROOT / "docs" / "notes" / "rex_sequence"
-    assert _bench().main(["judge", str(d / "walk.json"), str(d / "turn.json"), str(d / "walk2.json")]) == 0
+    assert _bench().main(["judge", *(str(SEQ).format(s) for s in ("walk", "turn", "walk2"))]) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["completes"] and got["fell"] == [False, False, False]
-    assert round(got["walk_m"], 2) == 2.05 and round(got["turn_deg"]) == 311 and round(got["walk2_m"], 2) == 1.05
+    assert round(got["walk_m"], 2) == 1.58 and round(got["turn_deg"]) == 90 and round(got["walk2_m"], 2) == 1.06
 
 
 def test_judge_of_a_missing_controller_is_one_line_and_exit_2(tmp_path, capsys):
-    d = ROOT / "docs" / "notes" / "rex_sequence"
-    assert _bench().main(["judge", str(d / "walk.json"), str(tmp_path / "no.json"), str(d / "walk2.json")]) == 2
+    walk, walk2 = str(SEQ).format("walk"), str(SEQ).format("walk2")
+    assert _bench().main(["judge", walk, str(tmp_path / "no.json"), walk2]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no.json" in err[0]
 

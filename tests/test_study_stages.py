@@ -41,14 +41,15 @@ search = { n_generations = 2 }
 
 
 def test_the_walk_turn_walk_judge_gives_the_recorded_sequence_its_verdict():
-    """A recorded completed walk → turn → walk, judged from its saved controllers."""
-    d = ROOT / "docs" / "notes" / "rex_sequence"
-    kept = rex_sequence_measures([d / "walk.json", d / "turn.json", d / "walk2.json"],
+    """A completed walk → turn → walk (the creatures study's seed 0), judged
+    from its controllers."""
+    d = ROOT / "gpmotion" / "studies" / "creatures" / "controllers"
+    kept = rex_sequence_measures([d / f"rex-sequence-seed0-{s}.json" for s in ("walk", "turn", "walk2")],
                                  ["walk", "turn", "walk2"])
     assert get_judge("walk-turn-walk").decide(kept, []) == (True, "completes")
     assert not any(kept[f"{n}_fell"] for n in ("walk", "turn", "walk2"))
-    assert round(kept["walk_distance_m"], 2) == 2.05 and round(kept["turn_turn_deg"]) == 311
-    assert round(kept["walk2_distance_m"], 2) == 1.05
+    assert round(kept["walk_distance_m"], 2) == 1.58 and round(kept["turn_turn_deg"]) == 90
+    assert round(kept["walk2_distance_m"], 2) == 1.06
     shorter = dict(kept, walk2_distance_m=0.9)
     assert get_judge("walk-turn-walk").decide(shorter, []) == (False, "incomplete")
 
