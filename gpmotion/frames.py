@@ -26,6 +26,19 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(d[::2], d[1::2]))
 
 
+def flights(traj, e: int = 0) -> int:
+    """Flight phases of episode ``e`` as a person counts hops and the filmstrip
+    marks them: take-offs of :func:`flight_events` (the whole figure off the
+    ground for at least its ``min_flight``, after touching it), not every
+    frame some contact point lets go."""
+    cf = traj.contact_force[e]
+    if not cf.shape[-1]:
+        return 0
+    height = traj.com[e][:, 2 if traj.is3d else 1]
+    events = flight_events(traj.times, height, cf.max(axis=1) == 0)
+    return sum(label == "take-off" for _, label in events)
+
+
 def flight_events(times, height, airborne, min_flight: float = 0.06) -> list[tuple[int, str]]:
     """``[(frame, label)]`` sorted by frame: "take-off" (first frame off the
     ground), "apex" (highest centre of mass in the air) and "landing" (first
