@@ -81,3 +81,13 @@ def test_numba_index_files_tell_a_compiled_module(tmp_path, monkeypatch):
         cache.announce_compile(tmp_path / "rollout_new.py")
     cache.announce_compile(tmp_path / "rollout_other.py")   # nobody listening
     assert heard == [tmp_path / "rollout_new.py"]
+
+
+def test_check_says_what_it_checks_while_it_runs(capsys):
+    from pathlib import Path
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    assert main(["check", "--plugins", str(examples), "--only-plugins"]) == 0
+    out, err = capsys.readouterr()
+    assert "checking 1 task (" in err
+    assert "[1/1] checking task lamp_reach-v1 …" in err
+    assert out.splitlines() == ["ok    task lamp_reach-v1"]

@@ -1,6 +1,8 @@
 """``gpmotion list``, ``show`` and ``check``: what is registered, one task in detail, the contract checks."""
 from __future__ import annotations
 
+import sys
+
 from .common import _activate_plugins
 
 
@@ -53,15 +55,38 @@ def cmd_check(args):
         if not checks:
             raise ValueError(f"{', '.join(args.plugins)}: no primitives, tasks or controller "
                              "families to check")
-    bad = sum(_report(f"{kind} {name}", fn, name) for kind, name, fn in checks)
+    from ..cache import on_cold_compile
+    from ..progress import CompileNote
+    print(f"checking {_counted(checks)} (each simulates or compiles: seconds each, "
+          "minutes for the first on a fresh machine)", file=sys.stderr, flush=True)
+    with on_cold_compile(CompileNote("simulation")):
+        bad = sum(_report(f"{kind} {name}", fn, name, k, len(checks))
+                  for k, (kind, name, fn) in enumerate(checks, 1))
     return 1 if bad else 0
 
 
-def _report(label, fn, arg):
+def _counted(checks) -> str:
+    """Like '25 primitives, 18 tasks and 5 families' (the kinds present)."""
+    kinds = [k for k in ("primitive", "task", "family") if any(c[0] == k for c in checks)]
+    parts = []
+    for k in kinds:
+        n = sum(c[0] == k for c in checks)
+        parts.append(f"{n} {k if n == 1 else ('families' if k == 'family' else k + 's')}")
+    return parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+def _report(label, fn, arg, k: int, n: int):
+    """One check: what runs now on stderr (a line rewritten on a terminal, cleared
+    before the verdict), its verdict on stdout."""
+    tty = sys.stderr.isatty()
+    now = f"[{k}/{n}] checking {label} …"
+    print(f"\r{now}\033[K" if tty else now, end="" if tty else "\n", file=sys.stderr, flush=True)
     try:
         fn(arg)
-        print(f"ok    {label}")
-        return 0
+        verdict, bad = f"ok    {label}", 0
     except AssertionError as e:
-        print(f"FAIL  {label}: {e}")
-        return 1
+        verdict, bad = f"FAIL  {label}: {e}", 1
+    if tty:
+        print("\r\033[K", end="", file=sys.stderr, flush=True)
+    print(verdict, flush=True)
+    return bad
