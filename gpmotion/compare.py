@@ -136,7 +136,8 @@ def _curves_csv(series) -> str:
 
 
 def plot_curves(path, series, task, window, window_evals, actuation):
-    """Best so far under the final scoring, median and quartile band per family."""
+    """Best final (log.csv's best_final: the best under the final weights), median
+    and quartile band over the seeds, per family."""
     from matplotlib.figure import Figure
 
     from .render import _save_png
@@ -155,7 +156,8 @@ def plot_curves(path, series, task, window, window_evals, actuation):
     log = ys.size and ys.min() > 0 and ys.max() > 20 * ys.min()   # families far apart
     if log:
         ax.set_yscale("log")
-    ax.set_ylabel("best cost so far, final weights\n(lower is better" + (", log scale)" if log else ")"))
+    ax.set_ylabel("best final (final weights): median, 25–75 %\n(lower is better"
+                  + (", log scale)" if log else ")"))   # log.csv's best_final, as the progress line
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(f"{task.name}: {' vs '.join(map(str, series))} ({actuation})")

@@ -91,3 +91,18 @@ def test_check_says_what_it_checks_while_it_runs(capsys):
     assert "checking 1 task (" in err
     assert "[1/1] checking task lamp_reach-v1 …" in err
     assert out.splitlines() == ["ok    task lamp_reach-v1"]
+
+
+def test_the_compare_plot_names_its_curve_as_the_progress_line_and_log_do(monkeypatch):
+    """compare plots log.csv's best_final: the progress line's 'best final', never
+    'best so far' (which names the best under the current weights)."""
+    import gpmotion.render as render
+    from gpmotion.compare import plot_curves
+    from gpmotion.task import get_task
+    drawn = {}
+    monkeypatch.setattr(render, "_save_png", lambda fig, path, dpi=None: drawn.update(fig=fig))
+    x = np.array([10.0, 20.0])
+    plot_curves("unused.png", {"gp": (x, x / 100, x / 90, x / 80)}, get_task("lamp_hop"),
+                None, None, "pd")
+    label = drawn["fig"].axes[0].get_ylabel()
+    assert label.startswith("best final (final weights)") and "so far" not in label

@@ -39,7 +39,7 @@ def curves(rows: list[dict], task) -> dict | None:
     out = {"x": gen, "xlabel": "generation",
            "series": [{"label": "best so far, current weights",
                        "y": [_num(r.get("best_so_far")) for r in rows], "color": "#1f77b4"},
-                      {"label": "best so far, final weights",
+                      {"label": "best final, final weights",
                        "y": [_num(r.get("best_final")) for r in rows], "color": "#2ca02c"},
                       {"label": "generation median, current weights",
                        "y": [_num(r.get("gen_median")) for r in rows], "color": "#8fb6d8",

@@ -81,7 +81,7 @@ def comparison(src: Path) -> tuple[dict, str]:
                        f"{r['wall_s_median']:.1f}"] for r in rows]}
     data = {"kind": "comparison", "panels": panels, "table": table,
             "subtitle": f"{task.name}, actuation {d['actuation']}, {int(d['budget']):,} evaluations per run",
-            "curves": {"title": "best so far under the final weights (median and quartiles of the seeds)",
+            "curves": {"title": "best final: the best under the final weights (median and quartiles of the seeds)",
                        "x": [float(v) for v in grid], "xlabel": "evaluations", "series": series,
                        "windows": []}}
     return data, f"comparison: {task.name}"
