@@ -3,8 +3,9 @@ comparison (``gpmotion compare`` folder), a folder of runs (a study) or a
 composite (``gpmotion compose`` folder or file).
 
 :func:`write_report` picks the kind from what the folder holds;
-:func:`report_data` gives the page's data; :func:`player_html` is the
-Jupyter view of a Trajectory.
+:func:`report_data` gives the page's data; :func:`player_html` and
+:func:`folder_html` are the Jupyter views (``_repr_html_``) of a Trajectory
+and of a run's or a study's result.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from pathlib import Path
 from ..records import FormatError, atomic_write_text
 from .page import page
 
-__all__ = ["write_report", "report_data", "player_html"]
+__all__ = ["write_report", "report_data", "player_html", "folder_html"]
 
 
 def report_data(source, best=None) -> tuple[dict, str]:
@@ -34,11 +35,15 @@ def write_report(source, out=None, best=None) -> Path:
     return Path(out)
 
 
-def player_html(traj, task=None, title: str = "motion") -> str:
-    """A Trajectory's player as an iframe (Jupyter's ``_repr_html_``)."""
-    import html as _html
-    from .encode import encode_motion
-    panel = {"name": title, "motion": encode_motion(traj, 0, task=task)}
-    doc = page({"kind": "motion", "panels": [panel]}, title)
-    return (f'<iframe style="width:100%;height:560px;border:0" '
-            f'srcdoc="{_html.escape(doc, quote=True)}"></iframe>')
+def player_html(traj, task=None, title: str = "motion", e: int = 0) -> str:
+    """Episode ``e`` of a Trajectory in the report's player, as an iframe (Jupyter)."""
+    from .inline import player_html as inline
+    return inline(traj, task=task, title=title, e=e)
+
+
+def folder_html(source, height: int = 900) -> str:
+    """A run, comparison or study folder's report as an iframe (Jupyter): the
+    page ``gpmotion report`` writes, nothing written to disk."""
+    from .inline import iframe
+    data, title = report_data(source)
+    return iframe(page(data, title), height)

@@ -70,6 +70,10 @@ class Trajectory:
                 f"{', senses' if self.senses is not None else ''}"
                 f"{f', {div} diverged' if div else ''})")
 
+    def _repr_html_(self) -> str:     # Jupyter: the report's player (the first episode)
+        from ..report.inline import player_html
+        return player_html(self)
+
     def episode(self, e: int) -> "Trajectory":
         """A one-episode view (keeps the leading axis)."""
         sl = slice(e, e + 1)

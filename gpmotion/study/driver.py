@@ -233,6 +233,18 @@ def check(spec: Spec) -> None:
                 raise ConfigError(f"{where}: {msg}") from None
 
 
+class StudyRows(list):
+    """run_study's rows (a list) with the study folder; Jupyter shows its report."""
+
+    def __init__(self, rows, path: Path):
+        super().__init__(rows)
+        self.path = Path(path)
+
+    def _repr_html_(self) -> str:
+        from ..report import folder_html
+        return folder_html(self.path)
+
+
 def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1,
               scheduler: str | None = None, runs: str | Path | None = None,
               quiet: bool = False, progress=None) -> list[dict]:
@@ -257,7 +269,7 @@ def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1
             what = str(e).split(";")[0] or "stopped"
             raise Stopped(f"{what}; the same `gpmotion study run` continues the study",
                           getattr(e, "code", 130)) from None
-        return sd.rows()
+        return StudyRows(sd.rows(), out)
 
 
 def _job(job: Job):
