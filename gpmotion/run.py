@@ -158,6 +158,15 @@ class _Recorder:
         self.last = time.monotonic()
 
 
+class RunResult(tuple):
+    """run's (best genome, best cost, run directory); Jupyter shows the run's report."""
+    __slots__ = ()
+
+    def _repr_html_(self) -> str:
+        from .report import folder_html
+        return folder_html(self[2].path)
+
+
 def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = False,
         resume: bool = False, quiet: bool = False, artifacts: bool = True,
         max_generations: int | None = None, extend_generations: int | None = None,
@@ -234,7 +243,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
         finally:
             if rd is not None:
                 rd.close()
-    return search.best, search.best_cost, rd
+    return RunResult((search.best, search.best_cost, rd))
 
 
 def _compile_note(task, quiet: bool):
