@@ -5,6 +5,11 @@ manifest ``gpmotion-plugin.toml`` (``modules = ["custom_task"]``) and pass
 `--plugins FOLDER` to any gpmotion command; `gpmotion.check_task` runs the
 same contract checks the built-in tasks pass.  Its id is ``lamp_reach-v1``
 (``version = 2`` publishes a changed score under a new id).
+
+This folder is such a plugin folder (its manifest names this file only):
+``gpmotion run lamp_reach --plugins examples``.  A run this script makes
+registers the task in its own process, so reading it back needs the folder
+too: ``gpmotion replay runs/example-lamp-reach --plugins examples``.
 """
 import numpy as np
 

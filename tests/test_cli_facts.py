@@ -24,3 +24,16 @@ def test_hops_are_the_flights_the_filmstrip_marks(name, tmp_path):
     chatter = int(((cf.max(axis=1) == 0)[1:] & (cf.max(axis=1) > 0)[:-1]).sum())
     if name == "lamp_limbo-gp":
         assert takeoffs < chatter, "short losses of contact are not hops"
+
+
+def test_the_docs_and_examples_use_no_deprecated_task_attribute():
+    """task.fig and task.p warn that they are deprecated: the docs show task.figure
+    and task.params."""
+    import re
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    files = [f for f in root.glob("docs/**/*.md") if "notes" not in f.parts]   # notes: history
+    files += [*root.glob("examples/*.py"), root / "README.md"]
+    used = [f"{f.relative_to(root)}: {m.group(0)}" for f in files
+            for m in re.finditer(r"\btask\.(fig|p)\b(?!\w)", f.read_text(encoding="utf-8"))]
+    assert not used, used
