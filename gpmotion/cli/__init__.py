@@ -56,8 +56,9 @@ STYLE_HELP = """costs and phased style points:
   with the generation's median under the same weights beside it, and can rise
   although no controller got worse; "best final" (column best_final) is the
   best so far re-scored with every term at full weight, the cost best.json
-  keeps ("–" while not yet known).  "solved" counts the controllers passing the
-  success test.  `gpmotion replay` shows each term's value, weight and phase;
+  keeps ("–" while not yet known).  "solved k of N evaluated" counts the
+  controllers evaluated in that generation that pass the success test.
+  Generations count from 0, the first population.  `gpmotion replay` shows each term's value, weight and phase;
   `gpmotion show TASK` lists a task's terms with their phase-in windows.
 """
 
