@@ -469,7 +469,7 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             rec.flush(search, time.perf_counter() - t0)
     if stop["sig"] is not None:
         term = stop["sig"] == signal.SIGTERM
-        raise Stopped(f"checkpoint saved after generation {search.generation}; "
+        raise Stopped(f"checkpoint saved after generation {search.logged_generation()}; "
                       f"`gpmotion resume {rec.rd.current_path}` continues", 143 if term else 130)
 
 

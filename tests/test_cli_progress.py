@@ -106,3 +106,30 @@ def test_the_compare_plot_names_its_curve_as_the_progress_line_and_log_do(monkey
                 None, None, "pd")
     label = drawn["fig"].axes[0].get_ylabel()
     assert label.startswith("best final (final weights)") and "so far" not in label
+
+
+def test_a_stopped_run_names_the_generation_its_log_ends_at(tmp_path, monkeypatch):
+    import os
+    import signal
+
+    import importlib
+    runmod = importlib.import_module("gpmotion.run")     # gpmotion.run is also the function
+    from gpmotion.run import RunConfig, Stopped, run
+    real = runmod._evaluator
+
+    def interrupting(*args, **kwargs):
+        ev = real(*args, **kwargs)
+        evaluate = ev.evaluate
+
+        def once(*a, **k):
+            os.kill(os.getpid(), signal.SIGINT)           # Ctrl-C during generation 0
+            return evaluate(*a, **k)
+        ev.evaluate = once
+        return ev
+    monkeypatch.setattr(runmod, "_evaluator", interrupting)
+    cfg = RunConfig(task="lamp_hop", params={"seconds": 0.2},
+                    search={"population": 4, "generations": 3})
+    with pytest.raises(Stopped, match="after generation 0;"):
+        run(cfg, tmp_path / "r", quiet=True, artifacts=False)
+    rows = list(csv.DictReader(open(tmp_path / "r" / "log.csv")))
+    assert [r["generation"] for r in rows] == ["0"]
