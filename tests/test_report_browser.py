@@ -10,7 +10,6 @@ screenshots in docs/images/report_*.png (larger runs, so they show something).
 """
 import io
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -269,3 +268,63 @@ def test_the_composite_marks_its_phases(opened, pages):
     for ph in phases:
         p.player(0, "seek(a)", (ph["from"] + ph["to"]) / 2)
         assert f"phase: {ph['name']}" in p.page.locator("#panel0 .hud").inner_text()
+
+
+
+def test_the_jupyter_player_plays_in_the_browser(opened, pages, tmp_path):
+    """A Trajectory's _repr_html_ is an iframe whose srcdoc is a working page."""
+    import html
+    import re
+    task, family, actuation, genome, _ = load_controller(pages["herman"])
+    traj = replay_genome(task, family, actuation, genome)[0]
+    frag = traj._repr_html_()
+    doc = html.unescape(re.fullmatch(r'<iframe style="[^"]*" srcdoc="([^"]*)"></iframe>', frag).group(1))
+    (tmp_path / "inline.html").write_text(doc, encoding="utf-8")
+    p = opened(tmp_path / "inline.html", size=(800, 560))
+    p.player(0, "seek(a)", 0.5)
+    assert p.player(0, "state()")["dims"] == 3 and _orange(p.pixels()).sum() > 50
+    assert not [e for e in p.errors if not any(b in e for b in BENIGN)]
+
+# ------------------------------------------------------------------ the docs' screenshots
+def _shot(browser, path: Path, png: Path, t_frac: float, film: bool = False, height=1000):
+    p = Page(browser, path, size=(1200, height))
+    try:
+        n = p.js("gpmotion.players.length")
+        for i in range(n):
+            if film:
+                k = p.js("gpmotion.players[0].film.length") // 2
+                p.player(i, "setFilm(a)", k)
+            end = p.js("i => { const d = gpmotion.players[i].d; return d.times[d.n - 1]; }", i)
+            p.player(i, "seek(a)", t_frac * end)
+            p.player(i, "draw()")
+        p.page.screenshot(path=str(png))
+    finally:
+        errors = p.close()
+    assert not errors, errors
+    assert png.stat().st_size > 20_000
+
+
+@pytest.mark.slow
+def test_the_docs_screenshots(browser, tmp_path):
+    """docs/images/report_{run2d,run3d,compare,composite}.png: the pages of a
+    lamp run, a Herman run, a comparison and a composite, shot in Chromium."""
+    from gpmotion.cli.compose import main as compose
+    from gpmotion.compare import compare
+    lamp = _run(tmp_path, "lamp_hop", seed=0, population=40, generations=10)
+    herman = _run(tmp_path, "herman_touch_nose", seed=0, population=24, generations=6)
+    cmp = tmp_path / "compare"
+    compare("lamp_hop", ["gp", "bsr-time"], 2, 400, cmp, quiet=True)
+    write_report(cmp)
+    comp = tmp_path / "composite"
+    script = tmp_path / "hop_then_settle.motion"
+    script.write_text("phase hop = dcm_x * (dtime ~= 0.8)\nphase settle = max_t(cm_z)\n"
+                      "total = (1 + hop) * (1 + settle)\n")
+    best = [str(cmp / "best" / f"{fam}-seed0.json") for fam in ("gp", "bsr-time")]
+    assert compose([str(script), "--controllers", *best, "--arrays", "4", "--rounds", "3", "--seconds", "2", "--transitions", "0.8",
+                    "--out", str(comp), "--no-artifacts", "--quiet"]) == 0
+    write_report(comp)
+    DOCS_IMAGES.mkdir(exist_ok=True)
+    _shot(browser, lamp / "report.html", DOCS_IMAGES / "report_run2d.png", 0.45, film=True)
+    _shot(browser, herman / "report.html", DOCS_IMAGES / "report_run3d.png", 0.8)
+    _shot(browser, cmp / "report.html", DOCS_IMAGES / "report_compare.png", 0.45, height=1300)
+    _shot(browser, comp / "report.html", DOCS_IMAGES / "report_composite.png", 0.55, height=800)

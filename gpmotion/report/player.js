@@ -391,7 +391,7 @@
       if (this.mode === "film") {
         const e = this.film[this.filmIndex];
         lines.push(`generation ${e.generation} (${this.filmIndex + 1}/${this.film.length})  cost ${fmt(e.cost)} then, ${fmt(e.cost_final)} final weights`);
-      } else lines.push(`best controller  cost ${fmt(this.panel.cost)} (final weights)`);
+      } else if (this.panel.cost !== undefined) lines.push(`best controller  cost ${fmt(this.panel.cost)} (final weights)`);
       if (this.clip.diverged_at !== null && this.clip.diverged_at !== undefined) lines.push(`diverged at ${this.clip.diverged_at.toFixed(2)} s`);
       return lines.join("\n");
     }

@@ -69,7 +69,7 @@ def comparison(src: Path) -> tuple[dict, str]:
         grid = g
         c = colors[k % len(colors)]
         series += [{"label": f"{fam} median", "y": [_num(v) for v in med], "color": c},
-                   {"label": f"{fam} quartiles", "y": [_num(v) for v in q25], "color": c, "dash": True},
+                   {"label": f"{fam} q25", "y": [_num(v) for v in q25], "color": c, "dash": True},
                    {"label": f"{fam} q75", "y": [_num(v) for v in q75], "color": c, "dash": True}]
     rows = summarize(runs)
     table = {"caption": "the table (cost re-scored at full style weight; lower is better)",
@@ -163,7 +163,8 @@ def composite(path: Path) -> tuple[dict, str]:
     head = list(rows[0]) if rows else []
     table = {"caption": "phases", "head": head,
              "rows": [[f"{v:.3f}" if isinstance(v, float) else str(v) for v in r.values()] for r in rows]}
-    panel = {"name": path.name, "task": " → ".join(p.name for p in comp.parts),
+    name = path.parent.name if path.name == "composite.json" else path.name
+    panel = {"name": name, "task": " → ".join(p.name for p in comp.parts),
              "motion": motion, "table": table}
     return ({"kind": "composite", "panels": [panel],
-             "subtitle": f"a composite of {len(comp.parts)} phases"}, f"composite: {path.name}")
+             "subtitle": f"a composite of {len(comp.parts)} phases"}, f"composite: {name}")
