@@ -39,6 +39,7 @@ _LAZY = {
     "SpecError": "figures", "compile_spec": "figures", "figure_names": "figures",
     "load_figure": "figures", "register_figure": "figures",
     "STANDARD_PRIMITIVES": ("gp.primitives", "STANDARD"), "primitive": "gp.primitives",
+    "GPSettings": "gp.settings",
     "evaluate_population": "toolbox", "make_toolbox": "toolbox",
     "Figure": "model", "Model": "model", "Scene": "model", "make_scene": "model",
     "load_plugins": ("plugins", "load_folder"), "read_json": "records",

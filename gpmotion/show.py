@@ -1,6 +1,7 @@
 """``gpmotion show TASK``: everything a user needs to set up a run of a task."""
 from __future__ import annotations
 
+from .gp.settings import gp_settings, terminal_names
 from .gp.targets import describe as describe_targets
 from .task import Task, get_task
 
@@ -55,7 +56,9 @@ def describe_task(name: str) -> str:
     fig = task.figure
     controlled = [fig.actuator_names[i] for i in task.controlled_actuators()]
     held = [n for n in fig.actuator_names if n not in controlled]
-    gp_defaults = ", ".join(f"{k} {v}" for k, v in task.gp_defaults.items())
+    gp = gp_settings(task)
+    gp_defaults = ", ".join(f"{k} {v}" for k, v in gp.defaults.items())
+    terminals = terminal_names(task)
     lines = [f"{task.id}: {task.description}",
              f"figure: {fig.name} ({fig.dimensions}-D, {fig.root} root, {fig.total_mass:.2f} kg, "
              f"{fig.n_act} actuated joints); episode {task.seconds:g} s at dt {task.dt * 1e3:g} ms",
@@ -73,12 +76,12 @@ def describe_task(name: str) -> str:
     if held:
         lines.append(_wrap("held at their neutral pose by PD", held))
     lines += [_wrap("sites", fig.site_names), _wrap("contacts", fig.contact_names),
-              _wrap("GP terminals (senses)", task.terminal_names()),
+              _wrap("GP terminals (senses)", terminals),
               *(f"  task sense {ts.name}" + (f" ({ts.doc})" if ts.doc else "")
-                + ("" if ts.name in task.terminal_names() else "; not a terminal by default")
+                + ("" if ts.name in terminals else "; not a terminal by default")
                 + f":\n    {ts.formula}" for ts in task.task_senses()),
-              _wrap("GP primitives (the task's set; --primitives to change)", task.primitives),
+              _wrap("GP primitives (the task's set; --primitives to change)", gp.primitives),
               _wrap("bsr-sense rules read (Auslander's Table 1)", _bsr_senses(fig)),
               f"GP search defaults: {gp_defaults or 'population 300, generations 40'}",
-              f"GP targets: {describe_targets(task.gp_targets)} (--targets to change)"]
+              f"GP targets: {describe_targets(gp.targets)} (--targets to change)"]
     return "\n".join(lines)

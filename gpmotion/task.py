@@ -28,9 +28,10 @@ the old id keep their meaning.  Records store the id; a record written
 before ids existed names the bare task, which means its v1 (:func:`task_id`
 with ``recorded=True``).
 
-The GP function set is named by the task (``primitives``, default
-:data:`gpmotion.gp.primitives.STANDARD`), never "whatever is registered", so
-a primitive added by a plugin changes no existing task's runs.
+A task holds nothing a controller family owns: GP's function set,
+terminals, targets and search defaults are GP's, declared on the task as
+``gp = GPSettings(...)`` (:mod:`gpmotion.gp.settings`) and read by the GP
+family only.
 """
 from __future__ import annotations
 
@@ -44,8 +45,6 @@ from typing import ClassVar
 import numpy as np
 
 from .figures import load_figure
-from .gp import targets as gp_targets
-from .gp.primitives import STANDARD
 from .model import Figure, Scene, make_scene
 
 WORST = 1e6        # cost of a diverged episode: finite, so JSON logs stay valid
@@ -125,19 +124,15 @@ class Task:
     figure: str | Figure = ""                         # class: a registry name; instance: a Figure
     description: ClassVar[str] = ""
     params: dict = {"seconds": 3.0}                   # class: defaults; instance: values
-    primitives: ClassVar[tuple[str, ...]] = STANDARD  # the GP function set, in opcode order
     bounds: ClassVar[dict[str, tuple[float, float]]] = {}   # parameter -> (lo, hi), inclusive
     param_docs: ClassVar[dict[str, str]] = {}            # parameter -> what it means (units)
     terms: ClassVar[tuple[Term, ...]] = ()
-    terminals: ClassVar[tuple[str, ...] | None] = None   # None: every sense of the figure
     controlled: ClassVar[tuple[str, ...] | None] = None  # actuators the controller drives
     #   (None: all); the others hold the figure's neutral pose with their PD servos
     actuation: ClassVar[str] = "pd"
     record_every: ClassVar[int] = 10
     dt: ClassVar[float] = 1e-3
     success_threshold: ClassVar[str] = ""                # human-readable, for tables
-    gp_defaults: ClassVar[dict] = {}                     # e.g. a harder task's population
-    gp_targets: ClassVar[str] = "angle"                  # what GP trees give: gpmotion.gp.targets (--targets)
     curriculum: ClassVar[dict[str, Ease]] = {}           # parameter -> Ease (scene params)
     view: ClassVar[dict] = {}                            # 3-D pictures: elev, azim, bodies, ground
 
@@ -186,18 +181,17 @@ class Task:
 
     def _use_variant(self, spec) -> None:
         """Run on a variant of the task's figure; it must have every actuated joint,
-        site, contact and terminal sense the task reads (checked by name)."""
+        site and contact the task reads (checked by name; the senses a family's
+        controller reads are checked by that family)."""
         fig = load_figure(spec)
         base = self.figure
         if (fig.dimensions, fig.root) != (base.dimensions, base.root):
             raise ValueError(f"task {self.name}: figure {fig.name} is {fig.dimensions}-D with a "
                              f"{fig.root} root; the task is written for {base.name}, "
                              f"{base.dimensions}-D with a {base.root} root")
-        derived = {s.name for s in self.task_senses()}     # the task's own senses: not the figure's
         needs = (("actuated joint", self.controlled or base.actuator_names, fig.actuator_names),
                  ("site", base.site_names, fig.site_names),
-                 ("contact", base.contact_names, fig.contact_names),
-                 ("sense", [n for n in self.terminals or () if n not in derived], fig.sense_names))
+                 ("contact", base.contact_names, fig.contact_names))
         missing = [f"{kind} {n!r}" for kind, names, have in needs for n in names if n not in have]
         if missing:
             raise ValueError(f"task {self.name}: figure {fig.name} lacks {', '.join(missing)} "
@@ -246,8 +240,8 @@ class Task:
         return np.zeros(traj.n_episodes, dtype=bool)
 
     def task_senses(self) -> tuple:
-        """Terminals derived from the figure's senses (gpmotion.gp.task_senses.TaskSense:
-        a name and a formula); a task names the ones its trees read in ``terminals``."""
+        """Senses derived from the figure's (gpmotion.gp.task_senses.TaskSense: a
+        name and a formula); GP trees read the ones its settings name as terminals."""
         return ()
 
     def describe(self, traj, measures) -> list[str]:
@@ -281,14 +275,6 @@ class Task:
         if missing:
             raise ValueError(f"task {self.name}: {missing} are not actuated joints of {self.figure.name}")
         return [names.index(n) for n in self.controlled]
-
-    def terminal_names(self) -> list[str]:
-        names = list(self.terminals) if self.terminals is not None else list(self.figure.sense_names)
-        derived = {s.name for s in self.task_senses()}
-        for n in names:
-            if n not in derived:
-                self.figure.sense_index(n)    # raises on an unknown sense
-        return names
 
     def params_at(self, progress: float) -> dict:
         """The parameters in force at run progress (the curriculum applied)."""
@@ -378,13 +364,6 @@ def register_task(cls: type[Task]) -> type[Task]:
     unknown = [t.param for t in cls.terms if t.param and t.param not in cls.params]
     if unknown:
         raise ValueError(f"task {cls.name}: terms weighted by unknown parameter(s) {unknown}")
-    if (not isinstance(cls.primitives, tuple) or not cls.primitives
-            or not all(isinstance(n, str) for n in cls.primitives)):
-        raise ValueError(f"task {cls.name}: primitives must be a non-empty tuple of primitive names")
-    try:
-        gp_targets.parse(cls.gp_targets)
-    except ValueError as e:
-        raise ValueError(f"task {cls.name}: gp_targets: {e}") from None
     old = _TASKS.get(cls.id)
     if old is not None and inspect.getsourcefile(old) != inspect.getsourcefile(cls):
         raise ValueError(f"task {cls.id!r} defined twice: {inspect.getsourcefile(old)} "

@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpmotion.bsr import secondary3d as s3
+from gpmotion.gp.settings import GPSettings
 from gpmotion.task import Task, Term
 
 # Bob and Rex are compared at the paper's resolution: 50 frames/s
@@ -169,14 +170,16 @@ class CreatureTask(Task):
     def describe(self, traj, m, e=0):
         return [", ".join(FACTS[f](m, e) for f in self.facts)]
 
-    def terminal_names(self) -> list[str]:
-        """GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):
-        com height and vertical velocity, the root's velocity, angular velocity
-        and up axis, every contact force, the driven joints' angles, and time."""
+    def __init__(self, **overrides):
+        super().__init__(**overrides)
+        # GP reads the raw senses 3-D BSR is built from (world frame, unfiltered):
+        # com height and vertical velocity, the root's velocity, angular velocity
+        # and up axis, every contact force, the driven joints' angles, and time
         fig = self.figure
         body = ["com_z", "vx", "vy", "com_vz", "wx", "wy", "wz", "up_x", "up_y", "up_z", "t"]
-        return (body + [f"force_{c}" for c in fig.contact_names]
-                + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()])
+        self.gp = GPSettings(terminals=tuple(
+            body + [f"force_{c}" for c in fig.contact_names]
+            + [f"angle_{fig.actuator_names[a]}" for a in self.controlled_actuators()]))
 
 
 _RESOLVING: list[str] = []        # the stage files being resolved, outermost first

@@ -21,6 +21,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from gpmotion.gp.settings import GPSettings
 from gpmotion.task import Task, Term
 
 FIGURE = "herman"
@@ -56,7 +57,7 @@ MAIN_WEIGHT = 10.0
 GP_DEFAULTS = {"population": 400, "generations": 50, "p_crossover": 0.85, "p_creep": 0.1}
 # The nose's search (herman_touch_nose): angle targets, and the last
 # 20 of the 50 generations polish the best; the versions that take it name it.
-NOSE_SEARCH = {"gp_targets": "angle", "gp_defaults": {**GP_DEFAULTS, "polish": 20}}
+NOSE_SEARCH = {"targets": "angle", "defaults": {**GP_DEFAULTS, "polish": 20}}   # GPSettings fields
 
 
 # Pictures of an arm task: the upper body, seen from the front right (mostly its
@@ -83,8 +84,7 @@ class HermanTask(Task):
     record_every = 5
     params = {"seconds": 1.5}
     controlled = ARM
-    terminals = TERMINALS
-    gp_defaults = GP_DEFAULTS
+    gp = GPSettings(terminals=TERMINALS, defaults=GP_DEFAULTS)
     view = VIEW
 
     def reached(self, traj, m) -> np.ndarray:

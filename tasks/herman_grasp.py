@@ -19,6 +19,8 @@ arm is not stopped by the table, so a penalty stands in for it).
 Success: the ball gripped and at least ``lift`` above its start at the end,
 with the motion at rest (``_herman.at_rest``).
 """
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.model import make_scene
@@ -42,7 +44,7 @@ class HermanGrasp(HermanTask):
     # 36 generations, not 50: the grip forms in the first 0.15 s and lifting
     # is found early; 50 took 89-108 s of main-thread CPU.  5 seeds
     # each: 5 / 5 at 42 (88-97 s), 5 / 5 at 36
-    gp_defaults = {**GP_DEFAULTS, "generations": 36}
+    gp = replace(HermanTask.gp, defaults={**GP_DEFAULTS, "generations": 36})
     bounds = {"lift": (0.0, 0.3)}
     param_docs = {"lift": "how high to lift the ball above its start (m)",
                   "seconds": "episode length (s)"}

@@ -43,7 +43,7 @@ class HermanReachStanding(HermanTouchObject):
     # Rate targets, as herman_touch_object (inherited), and 35 generations: a
     # generation of the standing body costs ~3 s of main-thread CPU, so 50 took
     # 121-148 s; 5 seeds: 3 / 5 solved in 104-112 s (angle, 50: 0 / 5)
-    gp_defaults = {**GP_DEFAULTS, "generations": 35}
+    gp = replace(HermanTouchObject.gp, defaults={**GP_DEFAULTS, "generations": 35})
     terms = HermanTouchObject.terms + (
         Term("balance", MAIN_WEIGHT, doc="largest horizontal pelvis excursion (m), +1 if it fell"),)
     success_threshold = (f"{HermanTouchObject.success_threshold}, pelvis within "
@@ -56,7 +56,7 @@ class HermanReachStanding(HermanTouchObject):
     def __init__(self, **overrides):
         super().__init__(**overrides)
         if self.params["forces"]:
-            self.terminals = TERMINALS + FOOT_FORCES
+            self.gp = replace(self.gp, terminals=TERMINALS + FOOT_FORCES)
 
     def scene(self):
         # herman_standing's own ground (its TOML's [ground]): stiff enough for 70 kg
@@ -91,7 +91,7 @@ class HermanReachStandingV2(HermanReachStanding):
     version = 2
     dt = 2e-3
     record_every = 5
-    gp_defaults = HermanTouchObject.gp_defaults
+    gp = replace(HermanReachStanding.gp, defaults=HermanTouchObject.gp.defaults)
 
 
 @register_task
@@ -117,7 +117,7 @@ class HermanReachStandingV4(SelfContact, HermanReachStandingV3):
     (3 / 5), which the heavier through term charges.  5 seeds:
     4 / 5 in 78-100 s of main-thread CPU."""
     version = 4
-    gp_targets, gp_defaults = NOSE_SEARCH["gp_targets"], NOSE_SEARCH["gp_defaults"]
+    gp = replace(HermanReachStandingV3.gp, **NOSE_SEARCH)
     terms = tuple(replace(t, param="w_through") if t.name == "through" else t
                   for t in HermanReachStandingV3.terms)
     params = {**HermanReachStandingV3.params, "w_rest": 3.0, "w_through": 3.0, "travel": 1.0,

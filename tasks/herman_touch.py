@@ -17,6 +17,8 @@ over the last 0.5 s (the finger should arrive and stay).  Success: within
 points as every Herman task.  ``herman_touch_nose`` is this task with the
 site fixed to the nose.
 """
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.sim import geometry3d
@@ -113,7 +115,8 @@ class HermanTouch(HermanTask):
             raise ValueError(f"{self.name}: site {site!r} is on the right arm, which does the touching")
         joints = self._joints(f, site)
         if joints != ARM:                     # more of the body under GP for this site
-            self.controlled, self.terminals = joints, senses_of(joints)
+            self.controlled = joints
+            self.gp = replace(self.gp, terminals=senses_of(joints))
 
     def _joints(self, f, site):
         return joints_for(f, site)
@@ -166,8 +169,7 @@ class HermanTouchV2(HermanTouch):
     param_docs = {**HermanTouch.param_docs,
                   "w_rest": "multiplier on the rest term's weight (1: as every arm task)"}
     terms = rest_scaled(HermanTouch.terms)
-    gp_targets = "rate"
-    gp_defaults = {**GP_DEFAULTS, "polish": 10}
+    gp = replace(HermanTouch.gp, targets="rate", defaults={**GP_DEFAULTS, "polish": 10})
     # The nose keeps herman_touch_nose's recipe: rate targets failed there (0 / 5,
     # elbow and wrists driven onto their limits), angles with 20 of polish 4 / 5
     ANGLE = {**NOSE_SEARCH, "w_rest": 1.0}
@@ -179,7 +181,7 @@ class HermanTouchV2(HermanTouch):
             overrides = {**overrides, "w_rest": self.ANGLE["w_rest"]}
         super().__init__(**overrides)
         if angle:
-            self.gp_targets, self.gp_defaults = self.ANGLE["gp_targets"], self.ANGLE["gp_defaults"]
+            self.gp = replace(self.gp, targets=self.ANGLE["targets"], defaults=self.ANGLE["defaults"])
 
 
 @register_task

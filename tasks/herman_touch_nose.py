@@ -25,7 +25,7 @@ class HermanTouchNose(HermanTouch):
     goal_label = "nose at rest"    # pictures: the scene goal, captioned
     # The last 20 of the 50 generations tune the best controller (--polish; memetic GP):
     # 5 seeds, 4/5 (10 of 50: 3/5; none: 2/5).
-    gp_defaults = NOSE_SEARCH["gp_defaults"]
+    gp = replace(HermanTouch.gp, defaults=NOSE_SEARCH["defaults"])
 
     @property
     def site(self) -> str:

@@ -10,6 +10,7 @@ distance at the end plus half its mean over the last 0.5 s (arrive, then
 stay); success also needs the motion at rest (``_herman.at_rest``).  Style
 points as every Herman arm task.
 """
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -48,11 +49,10 @@ class HermanTouchObject(HermanTask):
     # a tree of the fingertip's error then settles on the object, where an angle
     # target settles short by the servo's sag.  5 seeds each: target 0
     # 3/5 (angle: 1/5), target 2 4/5 (angle: 0/5).
-    gp_targets = "rate"
     # The last 10 of the 50 generations tune the best controller (--polish; memetic GP):
     # 5 seeds each: targets 0, 1, 2 solve 4, 2, 4 of 5 (without: 3, 1, 4;
     # 20 of 50: 3, 3, 4; target 1 with the limits term: 3).
-    gp_defaults = {**GP_DEFAULTS, "polish": 10}
+    gp = replace(HermanTask.gp, targets="rate", defaults={**GP_DEFAULTS, "polish": 10})
     preset_weights: ClassVar[dict] = {}      # preset -> its own default term weights (v2)
     param_docs = {"target": "preset object: 0 chest front, 1 low right beside the hip, "
                             "2 high across to the left; -1 uses x, y, z",
@@ -163,7 +163,7 @@ class HermanTouchObjectV4(HermanTouchObjectV3):
     def __init__(self, **overrides):
         super().__init__(**overrides)
         if self.contact:
-            self.gp_targets, self.gp_defaults = self.RECIPE["gp_targets"], self.RECIPE["gp_defaults"]
+            self.gp = replace(self.gp, **self.RECIPE)
 
     @property
     def contact(self) -> bool:

@@ -17,6 +17,8 @@ that window:
 
 Style points as every Herman arm task.
 """
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.task import Term, register_task
@@ -88,7 +90,7 @@ class HermanWave(HermanTask):
     params = {"seconds": 2.4}
     # 36 generations, not 50: its 2.4 s episodes made 50 take 100-132 s of
     # main-thread CPU; 5 seeds: 5 / 5 solved in 75-83 s
-    gp_defaults = {**GP_DEFAULTS, "generations": 36}
+    gp = replace(HermanTask.gp, defaults={**GP_DEFAULTS, "generations": 36})
     goal_label = "raised-hand point"   # pictures: the scene goal, captioned
     terms = (Term("wave", MAIN_WEIGHT, main=True,
                   doc="mean of: hand below the shoulder, too few passes, too small a swing (0..1)"),

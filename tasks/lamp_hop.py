@@ -6,6 +6,7 @@ put after arriving, never hit the head or fall over, end at the neutral pose.
 """
 import numpy as np
 
+from gpmotion.gp.settings import GPSettings
 from gpmotion.gp.subgoals import Subgoal
 from gpmotion.model import make_scene
 from gpmotion.task import Task, Term, register_task
@@ -63,11 +64,12 @@ class LampHop(Task):
                   "seconds": "episode length (s)"}
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
-    paper_terminals = PAPER_TERMINALS           # the gritz-hahn preset's terminal set
     # the style terms phase in over 16 generations; the run stops once they are at full
     # weight and the final-weights best gained < 1 % in 3 generations, at 24 at most
-    # (seeds 0-4: 14-15 M simulated steps, cost 0.073-0.077; 40 fixed generations: 35 M)
-    gp_defaults = {"generations": 24, "phase_span": 16, "patience": 3}
+    # (seeds 0-4: 14-15 M simulated steps, cost 0.073-0.077; 40 fixed generations: 35 M);
+    # paper_terminals: the gritz-hahn preset's terminal set
+    gp = GPSettings(defaults={"generations": 24, "phase_span": 16, "patience": 3},
+                    paper_terminals=PAPER_TERMINALS)
 
     def subgoals(self):
         """Subgoal terminals (GP option ``subgoals``): 1.0 once arrived."""

@@ -11,6 +11,8 @@ the GP terminals, Gritz & Hahn's "the pole's position relative to the head":
 kinematics over the lamp's senses.  Off by default: the measured success
 rates are for the default terminal set.
 """
+from dataclasses import replace
+
 import numpy as np
 
 from gpmotion.gp.subgoals import Subgoal
@@ -73,7 +75,8 @@ class Limbo:
 @register_task
 class LampLimbo(Limbo, LampHop):
     name = "lamp_limbo"
-    gp_defaults = {}          # 40 generations in full: the hop's stop criterion is not measured here
+    # 40 generations in full: the hop's stop criterion is not measured here
+    gp = replace(LampHop.gp, defaults={})
     description = "the lamp hops to a target, passing under a limbo pole"
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42,   # standing, the lamp is 0.50 m tall
               "pole_start": 0.60, "pole_senses": 0.0}
@@ -92,7 +95,7 @@ class LampLimbo(Limbo, LampHop):
         if self.params["pole_senses"] not in (0.0, 1.0):
             raise ValueError(f"lamp_limbo: pole_senses must be 0 or 1, got {self.params['pole_senses']}")
         if self.params["pole_senses"]:
-            self.terminals = tuple(self.figure.sense_names) + POLE_SENSES
+            self.gp = replace(self.gp, terminals=tuple(self.figure.sense_names) + POLE_SENSES)
 
     def task_senses(self):
         """The head tip relative to the pole (the formulas give it relative to

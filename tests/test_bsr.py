@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -180,7 +181,9 @@ def test_encode_batch_pads_and_checks():
 def test_initial_distributions_table2():
     rng = np.random.default_rng(11)
     dt, T = 0.005, 4.0
-    g = G.random_sense_genome(rng, 4000, 3, LIMITS3, dt, T)
+    parts = [G.random_sense_genome(rng, G.MAX_RULES, 3, LIMITS3, dt, T) for _ in range(4)]
+    g = SimpleNamespace(**{k: np.concatenate([getattr(p, k) for p in parts])
+                           for k in ("mu", "lam", "tau", "theta0")})     # 4,000 rules' draws
     side = 2.0 / g.lam
     assert g.mu.min() >= -0.5 and g.mu.max() <= 1.5 and abs(g.mu.mean() - 0.5) < 0.02
     assert side.min() >= 0.4 - 1e-12 and side.max() <= 4.0 + 1e-12

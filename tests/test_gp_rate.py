@@ -59,7 +59,7 @@ def test_rate_targets_start_at_neutral_and_hold_within_the_joint_range():
 
 def test_the_mode_is_the_task_default_recorded_and_legacy_records_mean_angles():
     task = get_task("herman_touch_nose")
-    assert make_family("gp", task).options["targets"] == task.gp_targets
+    assert make_family("gp", task).options["targets"] == task.gp.targets
     assert make_family("gp", task, targets="rate").config()["targets"] == "rate"
     assert recorded_options("gp", {"family": "gp", "tau": 0.1}) == {"targets": "angle"}
     assert recorded_options("gp", {"targets": "rate"}) == {"targets": "rate"}

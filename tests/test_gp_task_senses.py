@@ -13,6 +13,7 @@ from deap import gp
 
 from gpmotion.families import make_family
 from gpmotion.gp import primitives as registry
+from gpmotion.gp.settings import GPSettings
 from gpmotion.gp.bytecode import STACK_CAP, encode_batch, encode_trees
 from gpmotion.gp.interpreter import load_interpreter
 from gpmotion.gp.presets import apply_preset
@@ -163,7 +164,7 @@ def test_lamp_limbo_pole_senses_are_the_head_tip_relative_to_the_pole():
 class _Declares(LampHop):
     """lamp_hop declaring task senses (unregistered, for this test)."""
     declared: tuple = ()
-    terminals = ("px", "t", "speed")
+    gp = GPSettings(terminals=("px", "t", "speed"))
 
     def task_senses(self):
         return self.declared

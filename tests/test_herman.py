@@ -7,6 +7,7 @@ import pytest
 import gpmotion
 from gpmotion.check import check_task
 from gpmotion.figures import load_spec
+from gpmotion.gp.settings import terminal_names
 from gpmotion.sim import geometry3d
 from gpmotion.task import get_task
 from gpmotion.tasks._herman import ARM, REST_SPEED, SETTLE, TERMINALS, HermanTask, pose_q, reach
@@ -207,7 +208,7 @@ def test_wave_cost_is_bounded_and_worst_when_the_arm_hangs(herman):
 @pytest.mark.parametrize("name", HERMAN_TASKS)
 def test_herman_tasks_see_the_fingertip_relative_to_their_goal(name, herman):
     task = get_task(name)
-    assert {"site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz"} <= set(task.terminal_names())
+    assert {"site_fingertip_r_dx", "site_fingertip_r_dy", "site_fingertip_r_dz"} <= set(terminal_names(task))
     scene = task.scene()
     tr = gpmotion.rollout(herman, scene, schedule_constant(herman), n_steps=50, record_senses=True)
     got = np.stack([tr.sense(f"site_fingertip_r_{a}") for a in ("dx", "dy", "dz")], -1)
@@ -344,13 +345,14 @@ def test_touch_succeeds_only_once_the_fingertip_has_come_to_rest(herman):
 def test_every_herman_task_requires_rest_and_shares_one_attribute_block(name):
     cls = type(get_task(name))
     assert issubclass(cls, HermanTask)
-    for attr in ("controlled", "terminals", "view", "success"):
+    for attr in ("controlled", "view", "success"):
         assert attr not in vars(cls), f"{name} repeats {attr}: it belongs to HermanTask"
+    assert cls.gp.terminals == HermanTask.gp.terminals, f"{name} repeats terminals: they belong to HermanTask"
     # a task may change its budget's generations (longer episodes) and how many of them
     # polish the best (--polish), nothing else of it
     own = ("generations", "polish")
-    assert {k: v for k, v in cls.gp_defaults.items() if k not in own} == \
-        {k: v for k, v in HermanTask.gp_defaults.items() if k not in own}
+    assert {k: v for k, v in cls.gp.defaults.items() if k not in own} == \
+        {k: v for k, v in HermanTask.gp.defaults.items() if k not in own}
     assert f"{REST_SPEED * 100:.0f} cm/s" in cls.success_threshold and f"{SETTLE} s" in cls.success_threshold
 
 
@@ -359,7 +361,7 @@ def test_touch_any_site_reaches_the_knee_by_bending_at_the_waist(herman):
     from gpmotion.tasks.herman_touch import WAIST, reach_site
     task = get_task("herman_touch", site="knee_l")
     assert tuple(task.controlled) == WAIST + ARM
-    assert {"angle_waist_y", "rate_waist_y"} <= set(task.terminal_names())
+    assert {"angle_waist_y", "rate_waist_y"} <= set(terminal_names(task))
     assert np.allclose(task.scene().goal3, _site(herman, herman.q_default, "knee_l"))
     starts = [(-0.3, 0.0, -0.3, 0.3, 0.0, 0.0), (-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
     assert reach_site(herman, "knee_l", ARM, starts) > 0.1                # the arm alone: short
@@ -372,7 +374,7 @@ def test_touch_a_left_arm_site_brings_both_arms_under_gp(herman):
     from gpmotion.tasks.herman_touch import LEFT_ARM, reach_site
     task = get_task("herman_touch", site="hand_l")
     assert tuple(task.controlled) == ARM + LEFT_ARM
-    assert {"angle_elbow_l", "rate_shoulder_l_x"} <= set(task.terminal_names())
+    assert {"angle_elbow_l", "rate_shoulder_l_x"} <= set(terminal_names(task))
     right = [(-0.8, 0.3, 0.0, 1.5, 0.0, 0.0)]
     assert reach_site(herman, "hand_l", ARM, right) > 0.02                # the left hand hangs
     assert reach_site(herman, "hand_l", ARM + LEFT_ARM,
@@ -404,9 +406,9 @@ def test_touch_v3_touches_the_left_elbow_with_the_right_arm_alone(herman):
     m = v3.measure(_still(herman, pose_q(herman, **AROUND)))
     assert m["touch_end"][0] < 0.005 and m["crossing"][0] < 0.005 and m["through"][0] == 0.0
     # a fixed target on the held body, as the nose: its recipe
-    assert (v3.gp_targets, v3.params["w_rest"]) == ("angle", 1.0)
-    assert (get_task("herman_touch-v3", site="knee_l").gp_targets,
-            get_task("herman_touch-v2", site="elbow_l").gp_targets) == ("rate", "rate")
+    assert (v3.gp.targets, v3.params["w_rest"]) == ("angle", 1.0)
+    assert (get_task("herman_touch-v3", site="knee_l").gp.targets,
+            get_task("herman_touch-v2", site="elbow_l").gp.targets) == ("rate", "rate")
 
 
 def test_touch_v3_counts_a_forearm_through_the_trunk(herman):
@@ -453,12 +455,12 @@ def test_touch_v2_settles_by_rate_targets_polish_and_a_heavier_rest_term():
                     "herman_touch_nose-v1": pytest.approx(3.0)}      # nose: v1's scoring
     assert {x.name: x.weight for x in get_task("herman_touch", site="knee_l", w_rest=1).terms}["rest"] == \
         pytest.approx(3.0)
-    assert (v1.gp_targets, v2.gp_targets, nose.gp_targets) == ("angle", "rate", "angle")
+    assert (v1.gp.targets, v2.gp.targets, nose.gp.targets) == ("angle", "rate", "angle")
     assert make_family("gp", v2).make_search(0).config()["polish"] == 10
     assert "polish" not in make_family("gp", v1).make_search(0).config()
     # on the nose v2 is herman_touch_nose-v1 (rate targets fail there; v4 is -v3: tested below)
     v2_nose = get_task("herman_touch-v2")
-    assert (v2_nose.site, v2_nose.gp_targets) == ("nose", "angle")
+    assert (v2_nose.site, v2_nose.gp.targets) == ("nose", "angle")
     assert {x.name: x.weight for x in v2_nose.terms} == {x.name: x.weight for x in nose.terms}
     assert make_family("gp", v2_nose).make_search(0).config()["polish"] == 20
 
@@ -485,8 +487,8 @@ def test_reach_standing_force_senses_read_the_soles_ground_forces():
     from gpmotion.controllers import schedule
     from gpmotion.tasks.herman_reach_standing import FOOT_FORCES
     plain, felt = get_task("herman_reach_standing"), get_task("herman_reach_standing", forces=1)
-    assert not set(FOOT_FORCES) & set(plain.terminal_names())
-    assert set(FOOT_FORCES) <= set(felt.terminal_names())
+    assert not set(FOOT_FORCES) & set(terminal_names(plain))
+    assert set(FOOT_FORCES) <= set(terminal_names(felt))
     fig = felt.figure
     tr = gpmotion.rollout(fig, felt.scene(), schedule.constant(fig.model.neutral), n_steps=500,
                           record_senses=True)
@@ -592,8 +594,7 @@ def _assert_same_search_with_self_contact(new, trial):
     assert weights(new) == weights(trial)
     assert len(new.scene().selfc) == len(SELF_CONTACT) and len(trial.scene().selfc) == 0
     assert np.array_equal(new.scene().goal3, trial.scene().goal3)
-    assert (new.gp_targets, new.gp_defaults, new.controlled, new.terminals, new.dt, new.n_steps) == \
-        (trial.gp_targets, trial.gp_defaults, trial.controlled, trial.terminals, trial.dt, trial.n_steps)
+    assert (new.gp, new.controlled, new.dt, new.n_steps) == (trial.gp, trial.controlled, trial.dt, trial.n_steps)
 
 
 @pytest.mark.parametrize("site", ["knee_l", "elbow_l", "nose"])
@@ -607,7 +608,7 @@ def test_touch_v4_is_the_trial_its_rates_were_measured_on(site):
     v4, v3 = get_task("herman_touch", site=site), get_task("herman_touch-v3", site=site, w_rest=3.0)
     assert v4.version == 4
     _assert_same_search_with_self_contact(v4, v3)
-    assert v4.gp_targets == ("rate" if site == "knee_l" else "angle")
+    assert v4.gp.targets == ("rate" if site == "knee_l" else "angle")
     assert get_task("herman_touch-v3", site=site).params["w_rest"] == (3.0 if site == "knee_l" else 1.0)
 
 
@@ -621,14 +622,14 @@ def test_touch_object_v4_is_the_trial_its_target_1_rate_was_measured_on():
         v4, v3 = (get_task(f"herman_touch_object-v{v}", target=target) for v in (4, 3))
         assert [(t.name, t.weight, t.phase) for t in v4.terms] == [(t.name, t.weight, t.phase) for t in v3.terms]
         assert v4.params == v3.params and np.array_equal(v4.scene().goal3, v3.scene().goal3)
-        assert (v4.controlled, v4.terminals, v4.dt, v4.n_steps) == (v3.controlled, v3.terminals, v3.dt, v3.n_steps)
+        assert (v4.controlled, v4.gp.terminals, v4.dt, v4.n_steps) == (v3.controlled, v3.gp.terminals, v3.dt, v3.n_steps)
         assert len(v3.scene().selfc) == 0
         if target == 1:
             assert len(v4.scene().selfc) == len(SELF_CONTACT)
-            assert (v4.gp_targets, v4.gp_defaults) == ("angle", {**v3.gp_defaults, "polish": 20})
+            assert (v4.gp.targets, v4.gp.defaults) == ("angle", {**v3.gp.defaults, "polish": 20})
         else:
             assert len(v4.scene().selfc) == 0
-            assert (v4.gp_targets, v4.gp_defaults) == (v3.gp_targets, v3.gp_defaults)
+            assert (v4.gp.targets, v4.gp.defaults) == (v3.gp.targets, v3.gp.defaults)
     assert get_task("herman_touch_object", target=1).version == 4
 
 
@@ -669,7 +670,7 @@ def test_reach_standing_v4_is_v3_with_the_nose_recipe_and_a_travelling_object():
 
 
 def _with_recipe(task, targets, polish):
-    task.gp_targets, task.gp_defaults = targets, {**task.gp_defaults, "polish": polish}
+    task.gp = replace(task.gp, targets=targets, defaults={**task.gp.defaults, "polish": polish})
     return task
 
 

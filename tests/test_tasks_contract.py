@@ -9,6 +9,7 @@ import pytest
 
 import gpmotion
 from gpmotion.check import check_task
+from gpmotion.families import make_family
 from gpmotion.plugins import load_folder
 from gpmotion.task import Term, get_task, task_ids, task_names
 
@@ -197,10 +198,6 @@ def test_each_task_owns_its_figure():
     ({"name": "lamp_x-v2"}, "must be an identifier"),
     ({"version": 0}, "version must be an integer >= 1"),
     ({"version": True}, "version must be an integer"),
-    ({"primitives": ["add"]}, "primitives must be a non-empty tuple"),
-    ({"primitives": ()}, "primitives must be a non-empty tuple"),
-    ({"gp_targets": "velocity"}, "gp_targets: .*unknown mode 'velocity'"),
-    ({"gp_targets": 3}, "gp_targets: GP targets must be a mode"),
     ({"terms": (Term("x", 1.0, main=True, param="w_x"),)}, r"unknown parameter\(s\) \['w_x'\]"),
 ])
 def test_register_task_rejects_bad_declarations(attrs, message):
@@ -210,8 +207,35 @@ def test_register_task_rejects_bad_declarations(attrs, message):
         register_task(cls)
 
 
+@pytest.mark.parametrize("kwargs, message", [
+    ({"primitives": "add"}, "primitives: a tuple of names"),
+    ({"primitives": ()}, "primitives: name at least one primitive"),
+    ({"terminals": ("px", 3)}, "terminals: a tuple of names"),
+    ({"targets": "velocity"}, "targets: .*unknown mode 'velocity'"),
+    ({"targets": 3}, "targets: GP targets must be a mode"),
+    ({"defaults": ["population"]}, "defaults: a dict of search settings"),
+])
+def test_gp_settings_refuse_bad_declarations_where_the_task_is_defined(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        gpmotion.GPSettings(**kwargs)
+
+
+def test_the_task_layer_holds_nothing_of_gp():
+    """GP's function set, terminals, targets and defaults are GP's: a Task has
+    none of them, and a task still declaring one the old way is told the new
+    spelling when GP reads it (BSR never reads them)."""
+    assert not [k for k in ("primitives", "terminals", "gp_targets", "gp_defaults", "paper_terminals",
+                            "terminal_names") if hasattr(gpmotion.Task, k)]
+    old = lamp_task("old_spelling", gp_defaults={"population": 50},
+                    measure=lambda self, traj: {"x": np.zeros(traj.n_episodes)})
+    with pytest.raises(ValueError, match=r"gp_defaults belong to GP's settings: declare "
+                                         r"gp = GPSettings\(defaults=\.\.\.\)"):
+        make_family("gp", old())
+    make_family("bsr-time", old())
+
+
 def test_a_task_naming_an_unknown_primitive_fails_the_contract():
-    unknown = lamp_task("unknown_prim", primitives=gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",),
+    unknown = lamp_task("unknown_prim", gp=gpmotion.GPSettings(primitives=gpmotion.STANDARD_PRIMITIVES + ("no_such_primitive",)),
                         measure=lambda self, traj: {"x": np.zeros(traj.n_episodes)})
     with pytest.raises(AssertionError, match="unknown primitive 'no_such_primitive'"):
         check_task(unknown)

@@ -33,8 +33,11 @@ MU_INIT = (-0.5, 1.5)
 DURATION_INIT = (0.5, 2.0)      # variable segments: relative durations, log-uniform
 DURATION_BOUNDS = (0.1, 10.0)   # valid range of a relative duration
 MU_BOUNDS = (-2.0, 3.0)
-MAX_RULES = 10_000              # caps for untrusted files
-MAX_WIDTH = 10_000
+# The one bound on R, the rules per controller (the paper uses R = 10), for
+# the command line, config files, study specs and controller files alike:
+# memory is rules x senses per genome, and 10^7 rules would exhaust it mid-run.
+MAX_RULES = 1000
+MAX_WIDTH = 10_000              # cap on a row's width in untrusted files
 SENSE_FORMAT = "bsr-sense-v1"
 TIME_FORMAT = "bsr-time-v1"
 

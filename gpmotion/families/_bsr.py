@@ -8,6 +8,7 @@ from .. import cli_options
 from ..bsr import genome as bsr_genome
 from ..bsr import mutation as bsr_mutation
 from ..cli_options import Option, number
+from ..records import validate_number
 from ..search.serial import SerialSearch, serial_generations
 from .base import Family
 
@@ -34,7 +35,7 @@ for _option in (
                "the serial search's restart threshold", dict(type=float), number(0.0, 1e300)),
         Option("--rules", "family", {}, "BSR rules per controller (default sense 8, time 4)",
                "the number of BSR rules (a GP controller is one tree per joint)", dict(type=int),
-               number(1, 10_000, True))):
+               number(1, bsr_genome.MAX_RULES, True))):
     cli_options.register_option(_option)
 
 
@@ -54,6 +55,8 @@ class BSRFamily(Family):
     # column per driven joint); the others hold the neutral pose with the
     # rollout's default τ, exactly as under a GP controller.
     def __init__(self, task, rules=None, bsr_dt=0.05, **options):
+        if rules is not None:
+            validate_number("rules", rules, lo=1, hi=bsr_genome.MAX_RULES, integer=True)
         super().__init__(task, rules=rules, bsr_dt=bsr_dt, **options)
         if not isinstance(bsr_dt, (int, float)) or not 0.001 <= float(bsr_dt) <= 1.0:
             # a tick of 1e-9 s lets unlimited-torque joints fling a figure metres (not travel)

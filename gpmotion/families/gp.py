@@ -20,6 +20,7 @@ from ..gp import targets as gp_targets
 from ..gp.operators import creep_constants, make_tree_operators, mutate_one_dof, random_tree
 from ..gp.primitives import CLAMP
 from ..gp.pset import build_pset
+from ..gp.settings import gp_settings, terminal_names
 from ..gp.subgoals import subgoal_table, task_subgoals
 from ..gp.task_senses import compile_formula, task_senses
 from ..search.gp import GPSearch
@@ -27,7 +28,7 @@ from .base import Family, register_family
 
 # Gritz & Hahn: crossover-dominant, little mutation, fitness-proportionate
 # selection; we keep one elite so the best is never lost.  A task may raise
-# them (Task.gp_defaults: herman's population).
+# them (GPSettings.defaults: herman's population).
 GP_DEFAULTS = dict(population=300, generations=40, p_crossover=0.9, p_mutation=0.02,
                    selection="roulette", elitism=1)
 BUDGET_POPULATION = 100            # compare's default population under a budget
@@ -214,8 +215,9 @@ class GPFamily(Family):
         if not 0.002 <= self.options["tau"] <= 10:
             raise ValueError(f"GP tau must be within 0.002..10 s, got {tau}")
         _check_erc_range(self.options["erc_range"])
-        terms = list(terminals) if terminals is not None else task.terminal_names()
-        prims = primitives or task.primitives                     # the task names its set
+        settings = gp_settings(task)
+        terms = list(terminals) if terminals is not None else terminal_names(task)
+        prims = primitives or settings.primitives                 # the task names its set
         declared = {s.name: s for s in (task_senses(task, prims) if task.task_senses() else ())}
         used = [declared[t] for t in terms if t in declared]      # computed only if a tree may read it
         self.info = build_pset([t for t in terms if t not in declared], prims,
@@ -225,7 +227,7 @@ class GPFamily(Family):
         self.task_programs = [compile_formula(s.tree, task.figure.sense_names,
                                               self.info.primitive_names) for s in used]
         self.actuators = task.controlled_actuators()
-        self.options["targets"] = targets = targets or task.gp_targets
+        self.options["targets"] = targets = targets or settings.targets
         self.law = target_law(task, self.actuators, targets)
 
     @property
@@ -312,7 +314,7 @@ class GPFamily(Family):
     # -- search ----------------------------------------------------------------
     @classmethod
     def search_defaults(cls, task) -> dict:
-        return {**GP_DEFAULTS, **task.gp_defaults}
+        return {**GP_DEFAULTS, **gp_settings(task).defaults}
 
     def make_search(self, seed: int, **settings):
         """GPSearch; ring migration fitted to small islands (the user cannot set

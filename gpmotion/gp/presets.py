@@ -5,7 +5,7 @@ options the user gives explicitly win.  The expansion is stored in the run's
 config.json, so a run resumes without knowing presets.
 
 ``gritz-hahn``, for tasks that declare the paper's terminal set
-(``paper_terminals``: the lamp tasks):
+(``GPSettings.paper_terminals``: the lamp tasks):
 
 * functions: Koza's + - * and protected %, and the paper's three-argument
   conditional ``ifpos`` (evaluate the first subtree; the second if it is
@@ -47,12 +47,14 @@ def preset_options(name: str, task) -> tuple[dict, dict]:
         raise ValueError(f"unknown GP preset {name!r}; known: {', '.join(PRESETS)}")
     fam, search = dict(PRESETS[name]["family"]), dict(PRESETS[name]["search"])
     if name == "gritz-hahn":
-        terms = getattr(task, "paper_terminals", None)
+        from .settings import gp_settings, terminal_names
+        terms = gp_settings(task).paper_terminals
         if not terms:
             raise ValueError(f"preset gritz-hahn needs a task that declares the paper's terminal "
-                             f"set (paper_terminals: lamp_hop, lamp_limbo); {task.name} does not")
+                             f"set (GPSettings paper_terminals: lamp_hop, lamp_limbo); "
+                             f"{task.name} does not")
         derived = {s.name for s in task.task_senses()}    # task senses the task adds stay
-        fam["terminals"] = list(terms) + [t for t in task.terminal_names() if t in derived]
+        fam["terminals"] = list(terms) + [t for t in terminal_names(task) if t in derived]
     return fam, search
 
 

@@ -1,4 +1,4 @@
-"""What a GP tree's output means, joint by joint (``--targets``, ``Task.gp_targets``).
+"""What a GP tree's output means, joint by joint (``--targets``, ``GPSettings.targets``).
 
 A spec is a comma list: at most one mode for every controlled joint (default
 ``angle``) and any number of ``JOINT=MODE`` exceptions, e.g.
