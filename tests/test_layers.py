@@ -97,6 +97,8 @@ FORBIDDEN = [
       "gpmotion.inprocess", "gpmotion.run", "gpmotion.cli", "gpmotion.records", "gpmotion.toolbox",
       "gpmotion.compose")),
     (("gpmotion.search",), ("gpmotion.run", "gpmotion.cli", "gpmotion.compare", "gpmotion.rundir")),
+    # a task is what a motion should achieve; what a family reads from it is the family's
+    (("gpmotion.task",), ("gpmotion.gp", "gpmotion.bsr", "gpmotion.families", "gpmotion.search")),
     (("gpmotion.evaluation", "gpmotion.evaluators", "gpmotion.inprocess", "gpmotion.robust",
       "gpmotion.toolbox", "gpmotion.families", "gpmotion.task"),
      ("gpmotion.run", "gpmotion.cli", "gpmotion.compose", "gpmotion.compare", "gpmotion.study")),
@@ -116,7 +118,7 @@ def _in(module: str, group) -> bool:
     return any(module == p or module.startswith(p + ".") for p in group)
 
 
-@pytest.mark.parametrize("low,high", FORBIDDEN, ids=["leaves", "sim", "gp", "search", "evaluation",
+@pytest.mark.parametrize("low,high", FORBIDDEN, ids=["leaves", "sim", "gp", "search", "task", "evaluation",
                                                     "harness"])
 def test_no_layer_imports_one_above_it(low, high):
     g = import_graph()
