@@ -20,6 +20,7 @@ from gpmotion.render3d import motion_frames
 from gpmotion.replay import load_controller, replay_genome
 from gpmotion.report import write_report
 from gpmotion.run import RunConfig, run
+from gpmotion.study import study_dir
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -116,7 +117,8 @@ def pages(tmp_path_factory):
                     "--out", str(comp), "--no-artifacts", "--quiet"])
     assert code == 0
     write_report(comp)
-    return {"lamp": lamp, "herman": herman, "compare": cmp, "composite": comp}
+    shipped = write_report(study_dir("gp-vs-bsr"), root / "study.html")    # a study's ledger
+    return {"lamp": lamp, "herman": herman, "compare": cmp, "composite": comp, "study": shipped}
 
 
 def _python_frames(run_dir):
@@ -132,9 +134,9 @@ def _orange(px) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the tests
-@pytest.mark.parametrize("kind", ["lamp", "herman", "compare", "composite"])
+@pytest.mark.parametrize("kind", ["lamp", "herman", "compare", "composite", "study"])
 def test_the_page_loads_without_console_errors(browser, pages, kind):
-    p = Page(browser, pages[kind] / "report.html")
+    p = Page(browser, pages[kind] if kind == "study" else pages[kind] / "report.html")
     n = p.js("gpmotion.players.length")
     shots = [p.pixels(i) for i in range(n)]
     errors = p.close()
@@ -255,6 +257,14 @@ def test_the_comparison_shows_one_player_per_family(opened, pages):
     assert rows == 1 + len(families)                              # the table: head + a row each
     for i in range(len(families)):
         assert _orange(p.pixels(i)).sum() > 50
+
+
+def test_a_study_shows_one_player_per_configuration(opened, pages):
+    from gpmotion.study import load_directory
+    spec, _ = load_directory(study_dir("gp-vs-bsr"))
+    p = opened(pages["study"])
+    assert p.js("gpmotion.players.length") == len(spec.configurations) == 3
+    assert p.page.locator("main > table tr").count() == 1 + len(spec.configurations)
 
 
 def test_the_composite_marks_its_phases(opened, pages):

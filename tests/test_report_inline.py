@@ -59,5 +59,9 @@ def test_a_run_and_a_study_show_their_report(tmp_path):
     rows = run_study(spec, tmp_path / "s", spec.report_seeds, quiet=True)
     assert [r["seed"] for r in rows] == [0, 1]
     data = _page_data(rows._repr_html_())
-    assert data["kind"] == "study" and len(data["panels"]) == 2
-    assert all(p["motion"]["n"] > 1 for p in data["panels"])
+    assert data["kind"] == "study" and len(data["panels"]) == 1          # one per configuration
+    best = min(rows, key=lambda r: r["cost"])
+    panel = data["panels"][0]
+    assert panel["cost"] == best["cost"] and f"(seed {best['seed']})" in panel["name"]
+    assert panel["motion"]["n"] > 1 and panel["film"]["entries"]       # the kept run folder
+    assert data["table"]["rows"][0][1] == 2                              # both seeds counted

@@ -27,6 +27,8 @@ def build(src: Path, best=None) -> tuple[dict, str]:
         return comparison(src)
     if (src / "composite.json").is_file():
         return composite(src / "composite.json")
+    if (src / "study.json").is_file() and (src / "results.jsonl").is_file():
+        return ledger_study(src)
     runs = sorted(p.parent for p in src.glob("**/best.json") if (p.parent / "config.json").is_file())
     if runs:
         return study(src, runs)
@@ -125,6 +127,53 @@ def study(src: Path, runs: list[Path]) -> tuple[dict, str]:
                               "rows": [[p["name"], p["task"], p["family"], f"{p['cost']:.4f}",
                                         "yes" if p["solved"] else "no"] for p in panels]}
     return data, f"study: {src.name}"
+
+
+def ledger_study(src: Path) -> tuple[dict, str]:
+    """A study directory (study.json and its ledger): the table ``gpmotion study
+    table`` prints (report seeds; tune seeds when it has no report rows) and one
+    panel per configuration, its cheapest run of those seeds: the run folder,
+    with its film, when the study kept it, else the ledger's controller."""
+    from ..study import load_directory
+    from ..study.table import _evals, _success, chosen, summarize
+    spec, rows = load_directory(src)
+    seed_set = "report" if any(r["seed"] in spec.report_seeds for r in rows) else "tune"
+    seeds = spec.report_seeds if seed_set == "report" else spec.tune_seeds
+    picked = chosen(rows, seeds)
+    summary = summarize(spec, rows, seed_set)
+    configs = [c for c in spec.configurations.values()
+               if any(k[0] == c.name for k in picked)][:MAX_PANELS]
+    notes, panels = [], []
+    if len(configs) < len(spec.configurations):
+        notes.append(f"{len(configs)} of the {len(spec.configurations)} configurations shown "
+                     f"(those with {seed_set}-seed runs, at most {MAX_PANELS})")
+    for conf in configs:
+        mine = [r for k, r in picked.items() if k[0] == conf.name]
+        best = min(mine, key=lambda r: r["cost"])
+        panels.append(_ledger_panel(src, conf, best, len(configs)))
+        panels[-1]["name"] = (f"{conf.label}: its best of {len(mine)} {seed_set} seeds "
+                              f"(seed {best['seed']})")
+    head = ["configuration", "runs", "evaluations per run", "success", "cost median [q25, q75]"]
+    table = {"caption": f"the study's table ({seed_set} seeds; cost lower is better)", "head": head,
+             "rows": [[r["label"], r["runs"], _evals(r["evaluations"]), _success(r),
+                       f"{r['cost_median']:.3f} [{r['cost_q25']:.3f}, {r['cost_q75']:.3f}]"]
+                      for r in summary["rows"] if r["runs"]]}
+    return ({"kind": "study", "panels": panels, "notes": notes, "table": table,
+             "subtitle": spec.title or spec.name}, f"study: {spec.name}")
+
+
+def _ledger_panel(src: Path, conf, row: dict, n_panels: int) -> dict:
+    stem = f"{conf.name}-seed{row['seed']}" + (f"-start{row['start']}" if conf.starts > 1 else "")
+    run_dir = src / "runs" / stem
+    if (run_dir / "best.json").is_file() and (run_dir / "config.json").is_file():
+        return run_panel(run_dir, film_bytes=FILM_BYTES // n_panels)
+    ctl = (src / str(row.get("controller", ""))).resolve()
+    if src.resolve() not in ctl.parents or not ctl.is_file():
+        raise FormatError(f"{src / 'results.jsonl'}: {conf.name} seed {row['seed']}: its "
+                          f"controller {row.get('controller')!r} is not a file of the study")
+    p = _controller_panel(ctl)
+    p["film_note"] = "the study kept no run folder for this run: no film of the generations"
+    return p
 
 
 def _results_table(path: Path) -> dict | None:
