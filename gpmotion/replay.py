@@ -32,6 +32,20 @@ def _after_from(params: dict, folder: Path) -> dict:
     return {**params, "after": ",".join(out)}
 
 
+def _check_record_tables(rec: dict, path: Path) -> None:
+    """A record's params and options are tables and its actuation one of the
+    known modes (null or absent: the family's default), never a falsy stand-in
+    such as 0 or {} read as "absent"."""
+    from .sim.rollout import ACTUATION
+    for key in ("params", "options"):
+        if rec.get(key) is not None and not isinstance(rec[key], dict):
+            raise FormatError(f"{path}: '{key}' must be a table, got {type(rec[key]).__name__}")
+    act = rec.get("actuation")
+    if act is not None and (not isinstance(act, str) or act not in ACTUATION):
+        raise FormatError(f"{path}: 'actuation' must be one of {', '.join(ACTUATION)}, "
+                          f"got {str(act)[:40]!r}")
+
+
 def load_controller(path: str | Path):
     """(task, family, actuation, genome, record) from best.json or a run dir.
 
@@ -47,6 +61,7 @@ def load_controller(path: str | Path):
     rec = read_json(path, kind="best")
     from .plugins import require
     require(rec.get("plugins"), str(path))
+    _check_record_tables(rec, path)
     try:
         params = _after_from(dict(rec.get("params", {})), path.parent)
         task = _recorded_task(rec, params)

@@ -336,6 +336,10 @@ def _record_extension(rd: RunDir, doc: dict, configured: int, extra: int) -> dic
     return rd.read_config()
 
 
+CHECKPOINT_KEYS = {"format", "version", "run_id", "config_digest", "search", "evaluations",
+                   "log_rows", "elapsed_s"}
+
+
 def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
     """Bring the search to the checkpoint (checked against this run) and check the
     log's first rows end at it; none yet: the run starts again.  Changes no file:
@@ -358,6 +362,10 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
         return rec
     ck = rd.load_checkpoint()
     where = str(rd.checkpoint_path)
+    unknown = sorted(set(ck) - CHECKPOINT_KEYS)
+    if unknown:
+        raise FormatError(f"{where}: unknown key(s) {unknown}; not a checkpoint this "
+                          "gpmotion wrote — refusing it")
     for k in ("run_id", "config_digest"):
         if ck.get(k) != ident[k]:
             what = "another run" if k == "run_id" else "a different config.json (edited?)"

@@ -161,6 +161,25 @@ def plain_name(text, what: str) -> str:
     return text
 
 
+def _check_rows(rows: list[dict], where) -> None:
+    """Rows a resume keeps: every column of the header filled, no extra field,
+    generation and evaluations whole numbers that never go down (a mangled row
+    is refused, not carried into the continued log)."""
+    last = (-1, 0)
+    for i, r in enumerate(rows, 1):
+        if None in r or any(v is None for v in r.values()):
+            raise FormatError(f"{where}: row {i} does not have the header's columns")
+        try:
+            now = (int(r.get("generation", 0)), int(r.get("evaluations", 0)))
+        except ValueError:
+            raise FormatError(f"{where}: row {i}: generation and evaluations must be whole "
+                              "numbers") from None
+        if now[0] < last[0] or now[1] < last[1] or min(now) < 0:
+            raise FormatError(f"{where}: row {i} goes back (generation {now[0]}, "
+                              f"{now[1]} evaluations after {last[0]}, {last[1]})")
+        last = now
+
+
 class RunDir:
     """One run's directory (see the module docstring).
 
@@ -476,6 +495,7 @@ class RunDir:
         if len(rows) < n_rows:
             raise FormatError(f"{self.log_path}: {len(rows)} rows, fewer than the {n_rows} "
                               "the checkpoint was taken after")
+        _check_rows(rows[:n_rows], self.log_path)
         return rows[:n_rows]
 
     def trim_log(self, n_rows: int) -> None:

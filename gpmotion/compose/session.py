@@ -80,6 +80,9 @@ def _resume_point(rd: RunDir, config: dict) -> tuple[dict | None, int]:
     if not rd.exists(CHECKPOINT):
         return None, 0                          # killed before its first round: start again
     ck = rd.read_json(CHECKPOINT, "compose-checkpoint")
+    unknown = sorted(set(ck) - {"format", "version", "search"})
+    if unknown:
+        raise FormatError(f"{rd.path / CHECKPOINT}: unknown key(s) {unknown}; refusing it")
     state = ck.get("search")
     last = state.get("round") if isinstance(state, dict) else None
     if type(last) is not int or not 0 <= last <= 10**6:

@@ -164,6 +164,10 @@ class TransitionSearch:
             best_score = -np.inf if state["best_score"] is None else float(state["best_score"])
         except (KeyError, TypeError, AttributeError) as e:
             raise ValueError(f"malformed transition-search state ({e})") from None
+        if best.shape != (self.P1,) or not np.all(np.isfinite(best)):
+            raise ValueError(f"best must be {self.P1} finite switch times")
+        if min(round_, step, evals) < 0:
+            raise ValueError("round, step and evaluations must be ≥ 0")
         self.pop, self.scores, self.pending, self.rng = pop, scores, pending, rng
         self.round, self.step, self.evaluations = round_, step, evals
         self.best, self.best_score = best, best_score

@@ -136,6 +136,8 @@ def compile_spec(spec: dict, sense_ranges=None) -> Figure:
     name, raw_bodies, bodies = _name_and_bodies(spec, _body)
     check_ground(spec)
     root = spec.get("root", {})
+    if not isinstance(root, dict):
+        raise SpecError("root: must be a table")
     rtype = root.get("type", "planar")
     if rtype not in ("planar", "fixed"):
         raise SpecError(f"root: unknown type {rtype!r} (planar, fixed)")

@@ -528,6 +528,14 @@ class GPSearch(GenerationalSearch):
         if len(self.population) != self.population_size:
             raise ValueError(f"its population has {len(self.population)} entries, the settings "
                              f"say {self.population_size}")
+        # a phase tells which costs compare: a mangled one must not pass as "another phase"
+        for what, got, want in (
+                ("parents.phase", self._parents_phase, self._cache_phase(self.generation)),
+                ("best.phase", self._best_phase, self.judged_phase(max(self.best_generation, 0)))):
+            if got is not None and (len(got) != len(want) or not all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                    for x in got)):
+                raise ValueError(f"{what} must be {len(want)} finite numbers, got {got!r:.60}")
 
     # -- checkpoints -------------------------------------------------------------
     def _state(self) -> dict:
