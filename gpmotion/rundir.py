@@ -131,6 +131,15 @@ def _is_temp(name: str) -> bool:
     return name.startswith(".") and (name.endswith(".tmp") or name.startswith(".write-test."))
 
 
+def _remove_temp(dirfd: int) -> None:
+    for name in os.listdir(dirfd):
+        if _is_temp(name):
+            try:
+                os.unlink(name, dir_fd=dirfd)
+            except OSError:
+                pass
+
+
 def _nonempty(path: Path) -> bool:
     try:
         return any(n != LOCK for n in os.listdir(path))
@@ -242,6 +251,18 @@ class RunDir:
                 return Path(now) if Path(now).resolve() != self.path.resolve() else self.path
         return self.path
 
+    def clean_temp(self, folder: str) -> None:
+        """Remove a killed writer's temp files from ``folder`` inside the directory
+        (a link there is not followed); the directory itself is cleaned when locked."""
+        try:
+            fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | _NOFOLLOW, dir_fd=self._dirfd)
+        except OSError:
+            return
+        try:
+            _remove_temp(fd)
+        finally:
+            os.close(fd)
+
     @classmethod
     def open(cls, path: str | os.PathLike) -> "RunDir":
         """An existing directory, locked, to continue writing it."""
@@ -253,12 +274,7 @@ class RunDir:
         if must_be_empty and _entries(self._dirfd):     # another writer came and went
             raise RunDirError(f"run directory {self.path} exists and is not empty; pass "
                               "--force to move it aside or --resume to continue it")
-        for name in os.listdir(self._dirfd):            # temp files of a killed writer
-            if _is_temp(name):
-                try:
-                    os.unlink(name, dir_fd=self._dirfd)
-                except OSError:
-                    pass
+        _remove_temp(self._dirfd)                       # temp files of a killed writer
         proc = Path(f"/proc/self/fd/{self._dirfd}")
         if proc.is_dir():
             self._base = proc

@@ -121,6 +121,7 @@ class StudyDir:
             if os.path.islink(ctl) or (ctl.exists() and not ctl.is_dir()):
                 raise RunDirError(f"{path / CONTROLLERS}: not a directory of this study")
             ctl.mkdir(exist_ok=True)
+            self.rd.clean_temp(CONTROLLERS)          # a controller's write cut by a kill
         except BaseException:
             self.rd.close()
             raise
