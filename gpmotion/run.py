@@ -291,9 +291,16 @@ def _write_config(rd: RunDir, cfg, task, family, actuation) -> dict:
     return rd.read_config()           # digest what is on disk
 
 
+CONFIG_KEYS = {"format", "version", "run_id", "run", "task_config", "family_config",
+               "actuation", "versions", "spec", "extended_generations"}
+
+
 def _check_tables(doc: dict, path) -> None:
     """config.json's recorded task and family settings are tables (or absent):
     a resume merges them, and a list or a number there must be a clear error."""
+    unknown = sorted(set(doc) - CONFIG_KEYS)
+    if unknown:
+        raise ConfigError(f"{path}: unknown key(s) {unknown}; not a config this gpmotion wrote")
     for key in ("task_config", "family_config"):
         if doc.get(key) is not None and not isinstance(doc[key], dict):
             raise ConfigError(f"{path}: '{key}' must be a table, got {type(doc[key]).__name__}")

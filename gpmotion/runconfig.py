@@ -64,6 +64,10 @@ class RunConfig:
             _check_type(source, f"run.params.{k}", v, (str, int, float, bool, dict))
         for k, v in d.get("family_options", {}).items():
             _check_type(source, f"run.family_options.{k}", v, (str, int, float, bool, list, None))
+        unknown = sorted(set(d.get("family_options", {})) - option_names(d["family"]))
+        if unknown:
+            raise FormatError(f"{source}: run.family_options has unknown option(s) {unknown} "
+                              f"for {d['family']}; known: {sorted(option_names(d['family']))}")
         _check_search(source, d["family"], d.get("search", {}))
         _check_bounds(source, d)
         for i, p in enumerate(d.get("plugins", [])):  # requirement records (plugins.require)
@@ -94,6 +98,23 @@ def search_keys(family: str) -> set[str]:
     """The search settings a config may set for a family."""
     from .families import family_class
     return family_class(family).setting_names()
+
+
+def option_names(family: str) -> set[str]:
+    """The options a family takes: its constructors' named parameters and the
+    command-line options that set one (a family stores any keyword it is given,
+    so an unknown one would be recorded and silently mean nothing)."""
+    import inspect
+
+    from .cli_options import OPTIONS
+    from .families import family_class
+    names = {o.keys[family] for o in OPTIONS if o.target == "family" and family in o.keys}
+    for cls in family_class(family).__mro__:
+        init = cls.__dict__.get("__init__")
+        if init is not None:
+            names |= {p.name for p in inspect.signature(init).parameters.values()
+                      if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    return names - {"self", "task"}
 
 
 def _check_search(source: str, family: str, search: dict) -> None:

@@ -117,6 +117,19 @@ def test_a_checkpoint_with_an_unknown_key_is_refused(world, tmp_path, capsys):
     _resume_refused(run, capsys, "unknown_1")
 
 
+@pytest.mark.parametrize("change,needle", [
+    (lambda d: d["run"]["family_options"].__setitem__("bogus", 1), "bogus"),
+    (lambda d: d.__setitem__("bogus_top", 1), "bogus_top")])
+def test_a_config_with_an_unknown_key_is_refused_before_any_checkpoint(world, tmp_path, capsys,
+                                                                        change, needle):
+    """With no checkpoint no digest binds config.json: its own keys must be checked."""
+    run = _copy(world / "run", tmp_path)
+    (run / "checkpoint.json").unlink()
+    (run / "best.json").unlink()
+    _edit_json(run / "config.json", change)
+    _resume_refused(run, capsys, needle)
+
+
 @pytest.mark.parametrize("where", ["parents", "best"])
 def test_a_checkpoint_with_a_mangled_phase_is_refused(world, tmp_path, capsys, where):
     run = _copy(world / "run", tmp_path)

@@ -288,10 +288,11 @@ def _stage(body: dict, where: str, name: str) -> Stage:
     if "figure" in body:
         params["figure"] = _figure(body["figure"], f"{where}.figure")
     options = _plain_table(body, "options", where, (str, int, float, bool, list))
-    unknown = sorted(set(options) - _option_names(family))
+    from ..runconfig import option_names
+    unknown = sorted(set(options) - option_names(family))
     if unknown:
         raise SpecError(f"{where}.options: unknown option(s) {unknown} for {family}; "
-                        f"known: {sorted(_option_names(family))}")
+                        f"known: {sorted(option_names(family))}")
     search = _plain_table(body, "search", where, (str, int, float, bool, list))
     from ..runconfig import search_keys
     unknown = sorted(set(search) - search_keys(family))
@@ -316,23 +317,6 @@ def _stage(body: dict, where: str, name: str) -> Stage:
     robust = _plain_table(body, "robust", where, (str, int, float, bool, list, dict))
     starts = _int(body.get("starts", 1), f"{where}.starts", 1, MAX_STARTS)
     return Stage(name, task, family, params, options, search, budget, actuation, robust, starts)
-
-
-def _option_names(family: str) -> set[str]:
-    """The options a family takes: its constructors' named parameters and the
-    command-line options that set one (a family stores any keyword it is given,
-    so an unknown one would be recorded and silently mean nothing)."""
-    import inspect
-
-    from ..cli_options import OPTIONS
-    from ..families import family_class
-    names = {o.keys[family] for o in OPTIONS if o.target == "family" and family in o.keys}
-    for cls in family_class(family).__mro__:
-        init = cls.__dict__.get("__init__")
-        if init is not None:
-            names |= {p.name for p in inspect.signature(init).parameters.values()
-                      if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
-    return names - {"self", "task"}
 
 
 def _figure(value, where: str):
