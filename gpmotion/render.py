@@ -264,23 +264,71 @@ def animate(path, segments, radii, times, *, poles=None, ground_z=0.0,
     clock = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top",
                     family="monospace", fontsize=9)
     return record_gif(path, fig, clock, lambda i: body.set_verts(capsules(seg[i], rad)),
-                      frames, durations, t, speed)
+                      frames, durations, t, speed, moving=[body, clock])
 
 
-def record_gif(path, fig, clock, pose, frames, durations, times, speed) -> int:
+def record_gif(path, fig, clock, pose, frames, durations, times, speed, moving=()) -> int:
     """Draw each frame (``pose(i)`` moves the figure to frame i, ``clock`` shows
     its time), quantize it to a palette as it is drawn, write the GIF; returns
-    the number of frames written."""
-    images = []
+    the number of frames written.
+
+    ``moving``: the artists ``pose`` and ``clock`` change, all in one axes.
+    Then the rest of the picture is drawn (and laid out) once, and each frame
+    redraws only those artists and the ones stacked above them, on a copy of
+    that background (blitting: the same pixels as a full draw).  Every frame
+    is mapped to one palette, taken from the first frame (a fast octree), so
+    neither a per-frame palette search nor the GIF writer's remapping runs
+    per frame.
+    """
+    draw = _blitter(fig, moving) if moving else _full_draw(fig)
+    images, palette = [], None
     for i in frames:
         pose(i)
         clock.set_text(f"t = {times[i]:5.2f} s\n{speed_text(speed)}")
-        fig.canvas.draw()
-        rgba = np.asarray(fig.canvas.buffer_rgba())
-        images.append(Image.fromarray(rgba[..., :3].copy()).quantize(
-            256, method=Image.Quantize.MEDIANCUT))
+        image = draw()
+        if palette is None:
+            palette = image.quantize(256, method=Image.Quantize.FASTOCTREE)
+        images.append(image.quantize(palette=palette, dither=Image.Dither.NONE))
     save_gif(path, images, durations)
     return len(images)
+
+
+def _rgb(canvas) -> Image.Image:
+    return Image.fromarray(np.asarray(canvas.buffer_rgba())).convert("RGB")
+
+
+def _full_draw(fig):
+    """Each frame drawn whole; a layout engine runs at the first draw only
+    (nothing that moves changes the layout: the axis limits are fixed)."""
+    def draw():
+        fig.canvas.draw()
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")
+        return _rgb(fig.canvas)
+    return draw
+
+
+def _blitter(fig, moving):
+    """Each frame: the still background, then the moving artists and every
+    artist stacked above the lowest of them, in drawing order."""
+    ax = moving[0].axes
+    z = min(a.get_zorder() for a in moving)
+    static = {ax.patch, ax.title, ax._left_title, ax._right_title, *ax.spines.values()}
+    top = sorted((a for a in ax.get_children()
+                  if a.get_visible() and a.get_zorder() >= z and a not in static),
+                 key=lambda a: a.get_zorder())          # stable: the axes' own order
+    for a in top:
+        a.set_animated(True)
+    canvas = fig.canvas
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+
+    def draw():
+        canvas.restore_region(background)
+        for a in top:
+            ax.draw_artist(a)
+        return _rgb(canvas)
+    return draw
 
 
 def save_gif(path, images, durations) -> None:
