@@ -142,7 +142,7 @@ def _remove_temp(dirfd: int) -> None:
 
 def _nonempty(path: Path) -> bool:
     try:
-        return any(n != LOCK for n in os.listdir(path))
+        return any(n != LOCK and not _is_temp(n) for n in os.listdir(path))
     except OSError:
         return False
 

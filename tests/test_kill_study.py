@@ -82,3 +82,18 @@ def test_a_controller_write_cut_by_a_kill_leaves_no_temp_file(reference, tmp_pat
     assert main(argv[:-2]) == 0
     assert not temp.exists()
     assert controllers(out) == controllers(ref)
+
+
+def test_a_search_killed_while_writing_its_config_is_begun_again_in_place(reference, tmp_path):
+    """Only the lock and a temp file of config.json: no run yet, nothing to move aside."""
+    s, ref = reference
+    out = tmp_path / "out"
+    argv = ["study", "run", str(s), "--out", str(out), "--quiet"]
+    assert main(argv + ["--seeds", "0"]) == 0
+    run = out / "runs" / "task-seed100-start0"
+    run.mkdir()
+    (run / ".lock").write_text("4242\n")
+    (run / ".config.json.4242.0a1b2c3d.tmp").write_text('{"half": ')
+    assert main(argv) == 0
+    assert not list(out.rglob("*.tmp")) and not list((out / "runs").glob("*.bak-*"))
+    assert untimed(read_rows(out)) == untimed(read_rows(ref))

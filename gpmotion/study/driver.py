@@ -100,8 +100,10 @@ def search_once(stage: Stage, search_seed: int, run_dir: Path, after: list[str],
     cfg = run_config(stage, search_seed, after, scheduler)
     resumed = (run_dir / "config.json").exists()
     c0 = time.process_time()
-    # a run killed before its config.json was whole is no run yet: moved aside, begun again
-    begun = run_dir.is_dir() and not resumed and any(p.name != ".lock" for p in run_dir.iterdir())
+    # a run killed before its config.json was whole is no run yet: begun again, anything
+    # more than the lock and a killed write's temp file moved aside first
+    from ..rundir import RunDir
+    begun = run_dir.is_dir() and not resumed and bool(RunDir(run_dir).names())
     run(cfg, run_dir, resume=resumed, force=begun, quiet=quiet, artifacts=False)
     cpu = time.process_time() - c0
     best = read_json(run_dir / "best.json", kind="best")
