@@ -16,13 +16,19 @@ Per task and seed, one run on the old defaults (generations 40 run in full:
   with ``--artifacts``, the pictures) and the fraction of it spent outside
   the rollout kernel (encoding, scoring, breeding, logging, pictures);
 * ``kernels``: distinct rollout kernels the run called, and how many
-  numba compiled cold (0 on a warm cache).
+  numba compiled cold (0 on a warm cache); ``jit``: numba-compiled functions
+  of gpmotion the process holds after the run, counted per signature
+  (compiled or loaded from the cache; a run in a fresh process);
+* ``finish_s``: of the wall time, what the end of the run took (replay of
+  the best, best.json and, with ``--artifacts``, the pictures and report).
 
 Seconds depend on the machine and its load; steps and the ratios do not.
 """
 from __future__ import annotations
 
 import argparse
+import gc
+import importlib
 import json
 import sys
 import tempfile
@@ -36,6 +42,7 @@ from gpmotion.records import read_json
 from gpmotion.run import RunConfig, run
 import gpmotion.sim.rollout as rollout_module
 
+run_module = importlib.import_module("gpmotion.run")   # the module (gpmotion.run is also a function)
 BARS = {"lamp_hop": 0.08}          # final cost a polished motion stays within (issue 50)
 # the defaults before the stop criteria: every generation run, phases over all of them
 OLD = {"patience": 0, "phase_span": 0}
@@ -92,7 +99,36 @@ class KernelMeter:
         event.unregister("numba:compile", self._compiles)
 
 
+def jit_signatures() -> int:
+    """Compiled signatures of every numba dispatcher alive in this process."""
+    from numba.core.registry import CPUDispatcher
+    return sum(len(d.overloads) for d in gc.get_objects() if isinstance(d, CPUDispatcher))
+
+
+def _timed_finish(spent: list):
+    """run._finish wrapped to add its wall time to ``spent``."""
+    inner = run_module._finish
+
+    def finish(*args, **kw):
+        t0 = time.perf_counter()
+        try:
+            return inner(*args, **kw)
+        finally:
+            spent.append(time.perf_counter() - t0)
+    return finish
+
+
 def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: bool) -> dict:
+    spent: list[float] = []
+    orig_finish = run_module._finish
+    run_module._finish = _timed_finish(spent)
+    try:
+        return _one_run(task, seed, search, threads, artifacts, spent)
+    finally:
+        run_module._finish = orig_finish
+
+
+def _one_run(task, seed, search, threads, artifacts, spent) -> dict:
     with tempfile.TemporaryDirectory() as d, KernelMeter() as meter:
         out = Path(d) / "run"
         t0 = time.perf_counter()
@@ -113,7 +149,8 @@ def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: 
             "steps": meter.steps, "to_bar": None if first is None else round(first * per_eval),
             "cost": round(best["final_cost"], 4), "solved": best["success"], "ok": bool(ok),
             "wall_s": round(wall, 1), "outside": round(1 - meter.seconds / wall, 3),
-            "kernels": len(meter.kernels), "compiled": meter.compiled}
+            "kernels": len(meter.kernels), "compiled": meter.compiled, "jit": jit_signatures(),
+            "finish_s": round(sum(spent), 1)}
 
 
 def _value(text: str):
@@ -138,7 +175,7 @@ def main(argv=None):
     kinds = [k for k in ("old", "new") if a.only in (None, k)]
     rows = []
     print(f"{'task':<22}{'seed':>5} {'':<4}{'gens':>5}{'evals':>7}{'steps':>12}{'to_bar':>12}"
-          f"{'cost':>8}{'ok':>4}{'wall_s':>8}{'outside':>8}{'kernels':>8}", file=sys.stderr)
+          f"{'cost':>8}{'ok':>4}{'wall_s':>8}{'outside':>8}{'kernels':>8}{'jit':>5}{'finish_s':>9}", file=sys.stderr)
     for task in a.tasks.split(","):
         for seed in (int(s) for s in a.seeds.split(",")):
             for kind in kinds:
@@ -151,7 +188,7 @@ def main(argv=None):
                       f"{r['steps'] / 1e6:>11.2f}M"
                       f"{'-' if r['to_bar'] is None else format(r['to_bar'] / 1e6, '.2f') + 'M':>12}"
                       f"{r['cost']:>8.4f}{'yes' if r['ok'] else 'no':>4}{r['wall_s']:>8.1f}"
-                      f"{r['outside']:>8.1%}{r['kernels']:>5} ({r['compiled']})",
+                      f"{r['outside']:>8.1%}{r['kernels']:>5} ({r['compiled']}){r['jit']:>5}{r['finish_s']:>9.1f}",
                       file=sys.stderr, flush=True)
     if a.json:
         print(json.dumps(rows, indent=1))
