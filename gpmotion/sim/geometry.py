@@ -37,10 +37,16 @@ def points_world(model, poses: np.ndarray, links: np.ndarray, local: np.ndarray)
     """World (x, z) of link-frame points; link −1 is the fixed root body."""
     fixed = np.broadcast_to(model.fixed_pose, poses.shape[:-2] + (1, 3))
     ext = np.concatenate([poses, fixed], axis=-2)       # index −1 → fixed pose
-    pl = ext[..., np.asarray(links), :]
-    c, s = np.cos(pl[..., 0]), np.sin(pl[..., 0])
+    links = np.asarray(links)
+    # cos/sin once per link, then gathered per point (several points share a
+    # link: sites and both capsule ends); the same arithmetic, bit for bit
+    c, s = np.cos(ext[..., 0])[..., links], np.sin(ext[..., 0])[..., links]
+    x, z = ext[..., 1][..., links], ext[..., 2][..., links]
     lx, lz = local[:, 0], local[:, 1]
-    return np.stack([pl[..., 1] + c * lx - s * lz, pl[..., 2] + s * lx + c * lz], axis=-1)
+    out = np.empty(c.shape + (2,))
+    out[..., 0] = x + c * lx - s * lz
+    out[..., 1] = z + s * lx + c * lz
+    return out
 
 
 def segments_world(model, q: np.ndarray) -> np.ndarray:
