@@ -73,7 +73,10 @@ def gp_settings(task) -> GPSettings:
         raise ValueError(f"task {task.name}: {', '.join(legacy)} belong to GP's settings: declare "
                          f"gp = GPSettings({', '.join(f'{LEGACY[k]}=...' for k in legacy)}) "
                          "(gpmotion.gp.settings)")
-    settings = getattr(task, "gp", DEFAULT)
+    try:
+        settings = task.gp
+    except AttributeError:
+        settings = DEFAULT
     if not isinstance(settings, GPSettings):
         raise ValueError(f"task {task.name}: gp must be a gpmotion.gp.settings.GPSettings, "
                          f"got {type(settings).__name__}")
