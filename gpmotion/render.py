@@ -313,7 +313,9 @@ def _blitter(fig, moving):
     artist stacked above the lowest of them, in drawing order."""
     ax = moving[0].axes
     z = min(a.get_zorder() for a in moving)
-    static = {ax.patch, ax.title, ax._left_title, ax._right_title, *ax.spines.values()}
+    # outside the data area or beneath everything: never overdrawn by the figure
+    titles = (getattr(ax, n, None) for n in ("title", "_left_title", "_right_title"))
+    static = {ax.patch, *titles, *ax.spines.values()}
     top = sorted((a for a in ax.get_children()
                   if a.get_visible() and a.get_zorder() >= z and a not in static),
                  key=lambda a: a.get_zorder())          # stable: the axes' own order
