@@ -1,15 +1,23 @@
-"""The shipped creatures ledger: each committed controller gives back the row
-that names it (the cost and success its search recorded; a sequence's
-composite measures and verdict), so the table printed from the ledger is what
-the controllers do."""
+"""The shipped studies: every search of every shipped spec builds (so `gpmotion
+study run NAME` can run it), and the creatures ledger's committed controllers
+give back the rows that name them (the cost and success each search recorded;
+a sequence's composite measures and verdict), so the table printed from the
+ledger is what the controllers do."""
 import pytest
 
 from gpmotion.replay import load_controller, replay_genome
-from gpmotion.study import SHIPPED, load_directory
+from gpmotion.study import SHIPPED, load_directory, shipped_names, spec_path
+from gpmotion.study.driver import check
 from gpmotion.study.judge import get_judge, rex_sequence_measures
+from gpmotion.study.spec import load
 
 CREATURES = SHIPPED / "creatures"
 SPEC, ROWS = load_directory(CREATURES)
+
+
+@pytest.mark.parametrize("name", shipped_names())
+def test_every_search_of_a_shipped_study_builds(name):
+    check(load(spec_path(name)))          # raises, naming the configuration, if one cannot run
 
 
 def _replayed(rel: str):
