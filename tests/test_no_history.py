@@ -60,7 +60,7 @@ def test_the_phrases_are_found():
         (1, f"as measured in {S} 14"), (3, f"the {S}s 20-21 table")]
     assert history_phrases(f"Tried in {S.capitalize()} 23.")
     assert history_phrases(f"left for the next {S}")
-    assert history_phrases("## What we learned")
+    assert history_phrases("## What we " + "learned")
     # the product's own words are not history: compose's session module, a process group
     assert not history_phrases("from ..compose import optimize, " + S)
     assert not history_phrases(f"start_new_{S}=True; after round 1 the log has two rows")
