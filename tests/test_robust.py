@@ -279,7 +279,7 @@ def test_the_documented_robust_controllers_keep_their_success_rate(name, rate):
     from pathlib import Path
     from gpmotion.robust import robustness
     from gpmotion.replay import load_controller
-    path = Path(__file__).resolve().parent.parent / "docs" / "notes" / "robust" / f"{name}.json"
+    path = Path(__file__).resolve().parent / "data" / "robust" / f"{name}.json"
     task, family, actuation, genome, _ = load_controller(str(path))
     r = robustness(task, family, actuation, genome, trials=100, seed=0)
     assert r["nominal_success"] and r["success_rate"] == pytest.approx(rate, abs=0.015)

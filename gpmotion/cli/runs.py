@@ -38,7 +38,7 @@ def _add_run_args(p):
     _add_plugins_arg(p)
     _add_tls_args(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")
-    p.add_argument("--no-artifacts", action="store_true", help="skip filmstrip/GIF/curve")
+    p.add_argument("--no-artifacts", action="store_true", help="skip the pictures (filmstrip, GIF, curve) and report.html")
     add_arguments(p)
     _add_robust_arguments(p)                                # --robust-starts K, --perturb ...
 
