@@ -187,3 +187,16 @@ def test_a_task_declaring_bad_senses_gets_one_clear_error():
         TaskSense("2fast", "vx")
     with pytest.raises(KeyError, match="has no sense 'speed'"):
         fam()                                                 # 'speed' declared nowhere
+
+
+def test_a_sense_no_tree_reads_needs_no_function_of_the_runs_set():
+    """lamp_limbo declares pole senses written with sin/cos; under the paper's
+    function set (no sin) they are not terminals, so the preset's run builds,
+    and asking for them as terminals is one clear error."""
+    from gpmotion.gp.presets import preset_options
+    task = get_task("lamp_limbo")
+    fam, _ = preset_options("gritz-hahn", task)
+    assert "sin" not in fam["primitives"] and make_family("gp", task, **fam).task_programs == []
+    felt = get_task("lamp_limbo", pole_senses=1)
+    with pytest.raises(ValueError, match="'sin' is not in this run's primitive set"):
+        make_family("gp", felt, **preset_options("gritz-hahn", felt)[0])

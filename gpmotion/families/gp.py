@@ -218,7 +218,8 @@ class GPFamily(Family):
         settings = gp_settings(task)
         terms = list(terminals) if terminals is not None else terminal_names(task)
         prims = primitives or settings.primitives                 # the task names its set
-        declared = {s.name: s for s in (task_senses(task, prims) if task.task_senses() else ())}
+        declared = {s.name: s for s in (task_senses(task, prims, used=set(terms))
+                                         if task.task_senses() else ())}
         used = [declared[t] for t in terms if t in declared]      # computed only if a tree may read it
         self.info = build_pset([t for t in terms if t not in declared], prims,
                                sense_names=task.figure.sense_names, erc_range=tuple(erc_range),

@@ -203,9 +203,11 @@ def evaluate(tree, senses: dict) -> float:
     return registry.clamp(registry.get(head).func(*(evaluate(a, senses) for a in tree[1:])))
 
 
-def task_senses(task, primitive_names) -> tuple[TaskSense, ...]:
+def task_senses(task, primitive_names, used=None) -> tuple[TaskSense, ...]:
     """The senses a task declares (``task_senses()``), parsed against its
-    figure's senses and ``primitive_names``; ValueError naming the task."""
+    figure's senses and ``primitive_names``; ValueError naming the task.
+    ``used``: the names a run's trees read; only those are parsed (a sense no
+    tree reads may use functions outside the run's set, e.g. the paper's)."""
     decl = getattr(task, "task_senses", None)
     found = tuple(decl() if callable(decl) else (decl or ()))
     if len(found) > MAX_TASK_SENSES:
@@ -219,8 +221,9 @@ def task_senses(task, primitive_names) -> tuple[TaskSense, ...]:
             raise ValueError(f"task {task.name}: task_senses() must give TaskSense objects, got {s!r}")
         if s.name in task.figure.sense_names:
             raise ValueError(f"task {task.name}: task sense {s.name!r} has a figure sense's name")
-        tree = parse(s.formula, task.figure.sense_names, primitive_names,
-                     what=f"task {task.name}, sense {s.name} = {s.formula!r}")
+        tree = None if used is not None and s.name not in used else parse(
+            s.formula, task.figure.sense_names, primitive_names,
+            what=f"task {task.name}, sense {s.name} = {s.formula!r}")
         out.append(TaskSense(s.name, s.formula, s.doc, tree))
     return tuple(out)
 
