@@ -19,18 +19,10 @@ import numpy as np
 RATE_WINDOW_S = 5.0          # evals/s is measured over about this much recent time
 
 
-def last_generation(search) -> int:
-    """The number log.csv gives the search's last generation: a generational
-    search's G generations are 0..G-1; a serial search's G rounds follow its
-    initial working set (generation 0), so they end at G."""
-    from .search.base import GenerationalSearch
-    return search.total - 1 if isinstance(search, GenerationalSearch) else search.total
-
-
 class Progress:
     """Progress on stderr: one rewritten line on a terminal, plain lines otherwise,
     at most one every ``every`` seconds (a serial round takes milliseconds).
-    ``last``: the number of the last generation (:func:`last_generation`)."""
+    ``last``: the number of the last generation (``search.last_generation``)."""
 
     def __init__(self, last: int, quiet: bool = False, every: float = 1.0):
         self.total, self.quiet, self.every = last, quiet, every

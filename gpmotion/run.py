@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .inprocess import spec_of
-from .progress import CompileNote, Progress, last_generation
+from .progress import CompileNote, Progress
 from .bsr.genome import MAX_RULES
 from .version import __version__
 from .families import make_family, recorded_options
@@ -92,7 +92,7 @@ def banner(cfg: RunConfig, task: Task, family, search, actuation: str, rd: RunDi
     own = "" if cfg.actuation else f", {family.name}'s default"
     note = family.banner_note()
     act = (f"  actuation: {actuation}{own}{' · ' + note if note else ''} · "
-           f"generations 0–{last_generation(search):,}")
+           f"generations 0–{search.last_generation:,}")
     return "\n".join([head, act, "  " + phase_line(task, search)])
 
 
@@ -252,8 +252,7 @@ def _compile_note(task, quiet: bool):
     from .cache import on_cold_compile
     if quiet:
         return contextlib.nullcontext()
-    fig = task.figure
-    return on_cold_compile(CompileNote(getattr(fig, "name", None) or str(fig)))
+    return on_cold_compile(CompileNote(task.figure.name))
 
 
 def _keep_legacy_noisy(rd: RunDir, cfg) -> None:
@@ -441,7 +440,7 @@ def _short(x) -> str:
 
 def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
     """ask → evaluate → tell → log row; checkpoint when due, at the end, on a signal."""
-    prog = Progress(last_generation(search), quiet)
+    prog = Progress(search.last_generation, quiet)
     t0 = time.perf_counter() - getattr(rec, "elapsed0", 0.0)
     stop = {"sig": None}
 

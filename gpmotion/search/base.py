@@ -234,6 +234,11 @@ class Search:
         """The generations (rounds) this search runs."""
         raise NotImplementedError
 
+    @property
+    def last_generation(self) -> int:
+        """The number log.csv gives the search's last generation."""
+        raise NotImplementedError
+
     def progress_of(self, generation: int) -> float:
         raise NotImplementedError
 
@@ -284,6 +289,10 @@ class GenerationalSearch(Search):
     @property
     def total(self) -> int:
         return self.generations
+
+    @property
+    def last_generation(self) -> int:
+        return self.generations - 1          # its G generations are 0..G-1
 
     def progress_of(self, generation: int) -> float:
         n = self.schedule or self.generations

@@ -177,6 +177,10 @@ class SerialSearch(Search):
     def total(self) -> int:
         return self.n_generations
 
+    @property
+    def last_generation(self) -> int:
+        return self.n_generations            # its rounds follow the initial set (generation 0)
+
     def extend(self, total: int, schedule: int) -> None:
         """Run to ``total`` rounds; progress keeps spanning ``schedule`` rounds."""
         self.schedule = schedule
