@@ -78,6 +78,18 @@ def test_no_tracked_file_is_named_by_session(tracked):
     assert not [n for n in tracked if SESSION_NAME.search(n)]
 
 
+# a session-named folder or file cited inside a text (a ledger's record path, a label's source)
+SESSION_PATH = re.compile(r"[A-Za-z]_s\d{1,2}(?:[_/.]|\b)")
+
+
+def test_no_tracked_text_cites_a_path_named_by_session(tracked):
+    hits = [f"{name}:{i}" for name, text in _texts(tracked) if name != "tests/test_no_history.py"
+            for i, line in enumerate(text.splitlines(), 1) if SESSION_PATH.search(line)]
+    assert not hits, "paths named by session: " + ", ".join(hits[:10])
+    assert SESSION_PATH.search('"imported":"docs/notes/auslander_s26/full-height-t1-seed0.json"')
+    assert not SESSION_PATH.search("bsr_sense keeps its senses_s over t_sample")
+
+
 def test_docs_holds_no_research_notes_that_nothing_reads(tracked):
     """Research data lives with its study (gpmotion/studies/NAME) or beside the
     test that reads it, and what no table, test or page uses is removed: a file
