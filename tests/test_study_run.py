@@ -105,6 +105,18 @@ def test_tables_rejudge_from_kept_measures_and_report_only_report_seeds(tmp_path
     assert main(["study", "table", str(out), "--judge", "nope"]) == 2
 
 
+def test_a_table_caption_names_the_seeds_its_rows_cover():
+    from gpmotion.study.table import markdown
+    row = {"label": "c", "runs": 2, "evaluations": [10], "counts": {"solved": 2},
+           "success": 2, "tested": 2, "expect": [], "interval95": [0.34, 1.0],
+           "seeds": [100, 101], "cost_median": 0.1, "cost_q25": 0.1, "cost_q75": 0.1}
+    summary = {"study": "s", "seeds": "report", "seed_list": [100, 101, 102, 103],
+               "quick": False, "rows": [row]}
+    assert markdown(summary).rstrip().endswith("report seeds 100–101 (2 of the spec's 4: 100–103)")
+    summary["seed_list"] = [100, 101]
+    assert markdown(summary).rstrip().endswith("report seeds 100–101")
+
+
 def test_wilson_interval():
     lo, hi = wilson(5, 10)
     assert lo == pytest.approx(0.2366, abs=1e-4) and hi == pytest.approx(0.7634, abs=1e-4)

@@ -95,8 +95,12 @@ def markdown(summary: dict) -> str:
                                         f"{r['cost_median']:.3f} [{r['cost_q25']:.3f}, "
                                         f"{r['cost_q75']:.3f}]"]) + " |")
     seeds = summary["seed_list"]
-    note = (f"{summary['seeds']} seeds {_seed_range(seeds)}"
-            + ("; --quick form" if summary["quick"] else ""))
+    ran = sorted({s for r in rows for s in r["seeds"]})
+    # the caption names the seeds the rows cover, not only the spec's list
+    note = f"{summary['seeds']} seeds {_seed_range(ran)}"
+    if ran != list(seeds):
+        note += f" ({len(ran)} of the spec's {len(seeds)}: {_seed_range(list(seeds))})"
+    note += "; --quick form" if summary["quick"] else ""
     return "\n".join(lines) + f"\n\n{note}\n"
 
 
