@@ -75,6 +75,19 @@ def test_a_study_runs_every_job_once_and_a_rerun_adds_nothing(tmp_path, capsys):
     assert (out / RESULTS).read_bytes() == before
 
 
+def test_configs_runs_a_subset_whose_rows_a_full_run_completes(tmp_path, capsys):
+    out, full = tmp_path / "out", tmp_path / "full"
+    assert main(["study", "run", str(spec(tmp_path)), "--out", str(out), "--quiet",
+                 "--configs", "nope"]) == 2
+    assert "no configuration nope" in capsys.readouterr().err and not out.exists()
+    assert main(["study", "run", str(spec(tmp_path)), "--out", str(out), "--quiet",
+                 "--configs", "gait"]) == 0
+    assert {r["config"] for r in read_rows(out)} == {"gait"}
+    assert main(["study", "run", str(spec(tmp_path)), "--out", str(out), "--quiet"]) == 0
+    assert main(["study", "run", str(spec(tmp_path)), "--out", str(full), "--quiet"]) == 0
+    assert untimed(read_rows(out)) == untimed(read_rows(full))
+
+
 def test_a_changed_spec_is_refused_in_an_existing_directory(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["study", "run", str(spec(tmp_path)), "--out", str(out), "--quiet",

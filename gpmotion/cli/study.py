@@ -37,6 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument("--out", required=True, help="the study directory (created; reused to resume)")
     r.add_argument("--seeds", default="all",
                    help="tune, report, all (default) or a comma list of the spec's seeds")
+    r.add_argument("--configs", metavar="NAME[,NAME]",
+                   help="run only these configurations (default all); rows are the same as "
+                   "a full run's, so a later run without --configs adds the rest")
     r.add_argument("--quick", action="store_true",
                    help="the spec's [quick] form: few seeds, a small search")
     g = r.add_mutually_exclusive_group()
@@ -82,7 +85,8 @@ def _run(args) -> int:
     spec = load(spec_path(args.spec), quick=args.quick)
     seeds = select_seeds(spec, args.seeds)
     rows = run_study(spec, args.out, seeds, workers=workers, scheduler=args.scheduler,
-                     runs=args.runs, quiet=args.quiet)
+                     runs=args.runs, quiet=args.quiet,
+                     configs=args.configs.split(",") if args.configs else None)
     from ..study.table import markdown, summarize
     n = sum(r["seed"] in seeds for r in rows)
     print(f"{args.out}: {n} rows for seeds {','.join(map(str, seeds))} "

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..records import ConfigError
-from .spec import Configuration, Spec, Stage
+from .spec import Configuration, Spec, SpecError, Stage
 
 CURVE_POINTS = 40
 
@@ -249,16 +249,21 @@ class StudyRows(list):
 
 def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1,
               scheduler: str | None = None, runs: str | Path | None = None,
-              quiet: bool = False, progress=None) -> list[dict]:
-    """Run every job of ``seeds`` not yet in ``out``'s ledger; returns all rows."""
+              quiet: bool = False, progress=None, configs: list[str] | None = None) -> list[dict]:
+    """Run every job of ``seeds`` (of the configurations named in ``configs``,
+    default all) not yet in ``out``'s ledger; returns all rows."""
     from .ledger import StudyDir, row_key
     check(spec)
+    unknown = sorted(set(configs or ()) - set(spec.configurations))
+    if unknown:
+        raise SpecError(f"--configs: no configuration {', '.join(unknown)} in {spec.name}; "
+                        f"it has {', '.join(spec.configurations)}")
     out = Path(out)
     with StudyDir(out, spec.digest(), spec.source, spec.quick) as sd:
         runs = Path(runs) if runs is not None else out / "runs"
         done = {row_key(r) for r in sd.rows()}
         todo = [j for j in jobs(spec, seeds, runs.resolve(), scheduler, quiet=quiet or workers > 1)
-                if j.key not in done]
+                if j.key not in done and (configs is None or j.config.name in configs)]
         progress = progress or StudyProgress(len(todo), len(done), quiet)
         try:
             for row, controllers in _finished(todo, workers):
