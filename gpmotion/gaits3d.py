@@ -16,13 +16,23 @@ helpers of :mod:`gpmotion.bsr.secondary3d`:
   (``secondary3d.count_steps(alternate=True)``);
 * a *flight*: ≥ ``MIN_FLIGHT`` (40 ms) with no foot down after the first
   touchdown; it *lands on the feet* when the frame it ends has only feet
-  down and the root upright.
+  down and the root upright;
+* a quadruped's feet form a front and a rear *pair* (names that differ only
+  in their last letter: ``foot_fl``/``foot_fr``, ``foot_hl``/``foot_hr``); a
+  *footfall* is a foot's touchdown after ≥ ``MIN_FLIGHT`` off the ground,
+  and it is *paired* when the other foot of its pair touches down within
+  ``PAIR_SYNC`` (60 ms) of it (the pair lands together, as in a bound, not
+  one after the other, as in a walk or gallop); each pair's *support* is its
+  share of the normal force on the feet over the motion.
 
 Labels, the first that holds:
 
 ``fallen``  fallen at any frame.
-``bound``   ≥ 2 flights, ≥ 2 of them landing on the feet, ≥ ``BOUND_DISTANCE``
-            (0.6 m, Cujo's trunk) forward, forward-facing.
+``bound``   a quadruped's ≥ 2 flights, ≥ 2 of them landing on the feet; ≥
+            ``BOUND_PAIRED`` (60 %) of footfalls paired; each pair carrying
+            ≥ ``BOUND_SUPPORT`` (20 %) of the weight (front and rear legs
+            both work); ≥ ``BOUND_DISTANCE`` (0.6 m, Cujo's trunk) forward,
+            forward-facing.
 ``walk``    a biped's ≥ ``WALK_STEPS`` (2) steps, ≥ ``WALK_DISTANCE`` (1 m)
             forward, forward-facing, heading changed by < ``TURN`` (45°).
 ``turn``    heading changed by ≥ ``TURN`` (45°).
@@ -42,6 +52,9 @@ UPRIGHT_HEIGHT = 0.6
 FACING = np.radians(30.0)
 MIN_FLIGHT = 0.04
 BOUND_DISTANCE = 0.6
+PAIR_SYNC = 0.06
+BOUND_PAIRED = 0.6
+BOUND_SUPPORT = 0.2
 WALK_DISTANCE = 1.0
 WALK_STEPS = 2
 TURN = np.radians(45.0)
@@ -52,6 +65,37 @@ def _runs(mask) -> list[tuple[int, int]]:
     m = np.concatenate([[False], np.asarray(mask, bool), [False]]).astype(np.int8)
     d = np.diff(m)
     return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def foot_pairs(feet) -> list[tuple[str, str]]:
+    """A quadruped's front and rear pairs: feet whose names differ only in the
+    last letter (empty unless the four feet make two such pairs)."""
+    groups: dict[str, list[str]] = {}
+    for f in feet:
+        groups.setdefault(f[:-1], []).append(f)
+    pairs = [tuple(g) for g in groups.values()]
+    return pairs if len(feet) == 4 and len(pairs) == 2 and all(len(p) == 2 for p in pairs) else []
+
+
+def _pair_measures(force, names, pairs, frame_dt) -> dict:
+    """Share of footfalls paired with the partner's, and the lesser pair's
+    share of the support (module doc)."""
+    gap = max(1, round(MIN_FLIGHT / frame_dt))
+    sync = max(1, round(PAIR_SYNC / frame_dt))
+    falls = {}
+    for pair in pairs:
+        for f in pair:
+            down = force[:, names.index(f)] > 0
+            falls[f] = [b for a, b in _runs(~down) if a > 0 and b - a >= gap and b < len(down)]
+    total = paired = 0
+    for x, y in pairs:
+        for f, g in ((x, y), (y, x)):
+            for t in falls[f]:
+                total += 1
+                paired += any(abs(t - u) <= sync for u in falls[g])
+    load = np.array([force[:, [names.index(f) for f in p]].sum() for p in pairs])
+    return {"footfalls": total, "paired": paired / total if total else 0.0,
+            "pair_support": float(load.min() / load.sum()) if load.sum() > 0 else 0.0}
 
 
 def measures(traj, feet, foot_sites=(), foot_groups=(), e: int = 0) -> dict:
@@ -80,12 +124,15 @@ def measures(traj, feet, foot_sites=(), foot_groups=(), e: int = 0) -> dict:
             continue
         flights += 1
         on_feet += bool(not (force[b, ~is_foot] > 0).any() and upright[b])
+    pairs = foot_pairs(list(feet))
     out = {"forward": float(d[-1, 0]), "sideways": float(abs(d[-1, 1])),
            "turn_deg": float(np.degrees(abs(yaw[-1] - yaw[0]))),
            "facing_deg": float(np.degrees(s3.facing_away(yaw))),
            "upright": float(upright.mean()), "fell": bool(fell[-1]),
            "fallen": float(fell.mean()), "flights": flights, "landed_on_feet": on_feet,
-           "steps": None}
+           "steps": None, "footfalls": None, "paired": None, "pair_support": None}
+    if pairs:
+        out.update(_pair_measures(force, names, pairs, frame_dt))
     if len(foot_groups) == 2 and len(foot_sites) == 2:
         xy = traj.sites()[e][:, [fig.site_names.index(n) for n in foot_sites], :2]
         fwd = np.stack([s3.in_start_frame(xy[:, k], yaw[0])[:, 0] for k in range(2)], -1)
@@ -100,7 +147,9 @@ def relabel(m: dict) -> str:
     facing = m["facing_deg"] <= np.degrees(FACING) and m["turn_deg"] <= np.degrees(FACING)
     if m["fell"]:
         return "fallen"
-    if m["flights"] >= 2 and m["landed_on_feet"] >= 2 and m["forward"] >= BOUND_DISTANCE and facing:
+    if (m.get("paired") is not None and m["flights"] >= 2 and m["landed_on_feet"] >= 2
+            and m["paired"] >= BOUND_PAIRED and m["pair_support"] >= BOUND_SUPPORT
+            and m["forward"] >= BOUND_DISTANCE and facing):
         return "bound"
     if (m["steps"] is not None and m["steps"] >= WALK_STEPS and m["forward"] >= WALK_DISTANCE
             and facing):
