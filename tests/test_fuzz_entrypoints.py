@@ -117,6 +117,23 @@ def test_a_checkpoint_with_an_unknown_key_is_refused(world, tmp_path, capsys):
     _resume_refused(run, capsys, "unknown_1")
 
 
+@pytest.mark.parametrize("where", ["search", "search.parents", "search.best",
+                                   "search.generation_best[0]", "search.history[-1]",
+                                   "search.final_best"])
+def test_an_unknown_key_nested_in_the_search_state_is_refused(world, tmp_path, capsys, where):
+    """A GP search state is checked at every level, not only the checkpoint's top."""
+    run = _copy(world / "run", tmp_path)
+
+    def plant(doc):
+        node = doc
+        for part in where.replace("[", ".").replace("]", "").split("."):
+            node = node[int(part)] if part.lstrip("-").isdigit() else node[part]
+        assert isinstance(node, dict)
+        node["nested_bogus"] = 1
+    _edit_json(run / "checkpoint.json", plant)
+    _resume_refused(run, capsys, "nested_bogus", where.split("[")[0])
+
+
 @pytest.mark.parametrize("change,needle", [
     (lambda d: d["run"]["family_options"].__setitem__("bogus", 1), "bogus"),
     (lambda d: d.__setitem__("bogus_top", 1), "bogus_top")])

@@ -98,6 +98,10 @@ class FinalBest:
             return
         if not isinstance(d, dict):
             raise ValueError(f"checkpoint {FINAL_KEY} must be an object or null")
+        unknown = sorted(map(str, set(d) - {"genome", "cost", "round"}))
+        if unknown:
+            raise ValueError(f"search.{FINAL_KEY}: unknown key(s) {unknown[:5]}; not a state "
+                             "this gpmotion wrote")
         self.genome, self.cost = self.family.from_json(d["genome"]), float(d["cost"])
         self.round = d.get("round")
 

@@ -93,6 +93,42 @@ STOP_ON_SUCCESS = (False, True, "full-weight")
 PATIENCE_TOLERANCE = 0.01     # patience: a relative gain below 1 % over K generations is none
 
 
+# The keys a gp-search-v1 state may hold, level by level (optional ones included):
+# a key this gpmotion did not write is a foreign or edited record, never ignored.
+_STATE_KEYS = {"format", "pset", "config", "generation", "evaluations", "stopped", "converged",
+               "final_trace", "random", "population", "costs", "parents", "best",
+               "generation_best", "history"}
+_NESTED_KEYS = {
+    "parents": {"phase", "genomes", "costs"},
+    "best": {"genome", "cost", "generation", "phase"},
+    "generation_best": {"generation", "progress", "cost", "genome"},
+    "history": {"generation", "progress", "evaluations", "evaluated", "min", "median", "mean",
+                "max", "best_so_far", "avg_tree_size", "max_tree_depth", "n_success",
+                "n_failed"},
+}
+
+
+def _check_keys(state: dict) -> None:
+    """Refuse a key at any level of the state that :meth:`GPSearch._state` never writes."""
+    def refuse(where, obj, known):
+        if not isinstance(obj, dict):
+            raise ValueError(f"{where} must be an object, got {type(obj).__name__}")
+        unknown = sorted(map(str, set(obj) - known))
+        if unknown:
+            raise ValueError(f"{where}: unknown key(s) {unknown[:5]}; not a state this "
+                             "gpmotion wrote")
+    refuse("search", state, _STATE_KEYS)
+    for name in ("parents", "best"):
+        if state.get(name) is not None:
+            refuse(f"search.{name}", state[name], _NESTED_KEYS[name])
+    for name in ("generation_best", "history"):
+        rows = state.get(name)
+        if not isinstance(rows, list):
+            raise ValueError(f"search.{name} must be a list")
+        for i, row in enumerate(rows):
+            refuse(f"search.{name}[{i}]", row, _NESTED_KEYS[name])
+
+
 def _is_int(x) -> bool:
     return isinstance(x, (int, np.integer)) and not isinstance(x, bool)
 
@@ -568,6 +604,7 @@ class GPSearch(GenerationalSearch):
         if state.get("pset") != self.family.info.hash:
             raise ValueError(f"checkpoint primitive set {state.get('pset')} differs from "
                              f"this family's {self.family.info.hash}")
+        _check_keys(state)
         info = self.family.info
 
         def key(d):
