@@ -41,6 +41,7 @@ WEIRD = [-1, 0, 1_000_000_000, 1e308, -0.5, "bogus", "", "../../x", None, True, 
 SCRIPT = ("phase one = dcm_x * (dtime ~= 0.5)\nphase two = max_t(cm_z)\n"
           "total = (1 + one) * (1 + two)\n")
 STUDY = Path(__file__).parents[1] / "gpmotion" / "studies" / "gp-vs-bsr" / "spec.toml"
+STAGED = STUDY.parents[1] / "creatures" / "spec.toml"      # rex-sequence: walk, turn, walk2
 
 
 def _compose_argv(world, out, *extra):
@@ -59,6 +60,7 @@ def world(tmp_path_factory):
     (d / "good.motion").write_text(SCRIPT)
     assert main([str(a) for a in _compose_argv(d, d / "comp")]) == 0
     shutil.copy(STUDY, d / "study.toml")
+    shutil.copy(STAGED, d / "staged.toml")
     return d
 
 
@@ -216,6 +218,66 @@ def test_a_bad_study_spec_is_one_line_and_writes_nothing(tmp_path, capsys, old, 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
 
 
+# references in a spec: a figure variant's ``extends`` (a registered figure) and a
+# task's ``after`` (earlier stages; a spec chains them with stages, never by name)
+_GP_CONF, _TURN = 'family = "gp"\n', 'name = "turn"\n'
+REF_EDITS = [
+    ("study", _GP_CONF, 'figure = { extends = "v", name = "v" }', "extends"),     # itself
+    ("study", _GP_CONF, 'figure = { extends = "lamp", name = "lamp" }', "own"),   # its base's name
+    ("study", _GP_CONF, 'figure = { extends = "starman", name = "lamp" }', "own"),
+    ("study", _GP_CONF, 'figure = { extends = "", name = "v" }', "extends"),
+    ("study", _GP_CONF, 'figure = { extends = "../lamp", name = "v" }', "extends"),
+    ("study", _GP_CONF, 'figure = { extends = "gpmotion/figures/lamp.toml", name = "v" }',
+     "extends"),
+    ("study", _GP_CONF, 'figure = { extends = "starman_damped", name = "v" }', "extends"),
+    ("study", _GP_CONF, 'figure = { extends = ["lamp"], name = "v" }', "extends"),
+    ("study", _GP_CONF, 'figure = { extends = "lamp", name = "v", bodies = { extends = "v" } }',
+     "bodies"),
+    ("study", _GP_CONF, 'params = { after = "x.json" }', "after"),
+    ("staged", _TURN, 'params = { after = "turn" }', "after"),                   # itself
+    ("staged", _TURN, 'params = { after = "walk2" }', "after"),                  # a later stage
+    ("staged", _TURN, 'params = { after = "turn.json,walk.json" }', "after"),
+    ("staged", _TURN, 'after = "walk"', "after"),
+    ("staged", 'name = "walk2"\n', 'name = "walk"', "two stages"),
+]
+
+
+def _ref_spec(world, tmp: Path, which: str, anchor: str, edit: str) -> Path:
+    text = (world / f"{which}.toml").read_text()
+    assert anchor in text
+    new = edit + "\n" if edit.startswith("name =") else anchor + edit + "\n"  # a rename
+    (tmp / "s.toml").write_text(text.replace(anchor, new, 1))
+    return tmp / "s.toml"
+
+
+@pytest.mark.parametrize("which,anchor,edit,needle", REF_EDITS,
+                         ids=[f"{i}-{w}" for i, (w, *_) in enumerate(REF_EDITS)])
+def test_a_bad_reference_in_a_study_spec_is_one_line_and_writes_nothing(
+        world, tmp_path, capsys, which, anchor, edit, needle):
+    s = _ref_spec(world, tmp_path, which, anchor, edit)
+    with no_hang(TIMEOUT_S):
+        assert main(["study", "run", str(s), "--out", str(tmp_path / "o"), "--quick",
+                     "--quiet"]) == 2
+    one_line_error(capsys, needle)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
+def test_figures_extending_each_other_in_a_loop_are_one_line(world, tmp_path, capsys,
+                                                             monkeypatch):
+    """A loop can only come from registered figures (a plugin's); the spec's variant
+    that starts from one is refused, naming the loop."""
+    from gpmotion import figures
+    monkeypatch.setitem(figures._REGISTRY, "loop_a", {"extends": "loop_b", "name": "loop_a"})
+    monkeypatch.setitem(figures._REGISTRY, "loop_b", {"extends": "loop_a", "name": "loop_b"})
+    s = _ref_spec(world, tmp_path, "study", _GP_CONF,
+                  'figure = { extends = "loop_a", name = "v" }')
+    with no_hang(TIMEOUT_S):
+        assert main(["study", "run", str(s), "--out", str(tmp_path / "o"), "--quick",
+                     "--quiet"]) == 2
+    one_line_error(capsys, "loop")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
 def test_every_shipped_study_names_only_known_family_options():
     from gpmotion.study import shipped_names, spec_path
     from gpmotion.study.spec import load
@@ -321,6 +383,8 @@ def _cases():
     for name in ("config.json", "checkpoint.json", "log.csv", "best.json"):
         for special in ("fifo", "dir"):
             out.append(("special", {"name": name, "what": special}))
+    refs = random.Random(SEED + 2)                    # after the rest: their cases unchanged
+    out += [("study-ref", {"seed": refs.randrange(2**31)}) for _ in range(30)]
     return out
 
 
@@ -418,6 +482,8 @@ def prepare(world: Path, tmp: Path, kind: str, case: dict) -> Case:
         (tmp / "s.toml").write_text((world / "study.toml").read_text().replace(old, new))
         return Case(["study", "run", tmp / "s.toml", "--out", tmp / "o", "--quick", "--quiet"],
                     tmp, left_nothing=[tmp / "o"])
+    if kind == "study-ref":
+        return _ref_case(world, tmp, rng)
     if kind == "special":
         run = _copy(world / "run", tmp)
         target = run / case["name"]
@@ -426,6 +492,28 @@ def prepare(world: Path, tmp: Path, kind: str, case: dict) -> Case:
         argv = ["replay", target] if case["name"] == "best.json" else ["resume", run, "--quiet"]
         return Case(argv, run)
     raise AssertionError(kind)
+
+
+# bad references: names that are not a registered figure (itself, a path, a
+# near miss, another study's variant, not text) and any ``after`` in a spec
+BAD_EXTENDS = ['"v"', '""', '"../lamp"', '"lamp/"', '" lamp"', '"LAMP"', '"lamp.toml"',
+               '"starman_damped"', '"/etc/passwd"', '"lamp\\u0000"', "3", "[]", "{}",
+               "true", '"x"']
+BAD_AFTER = ['"walk"', '"turn"', '"walk2"', '""', '"turn.json"', '"a.json,b.json"',
+             '"../walk.json"', "1", "true", '"/etc/passwd"']
+
+
+def _ref_case(world, tmp: Path, rng) -> Case:
+    if rng.random() < 0.5:
+        name = rng.choice(['"v"', '"lamp"', '"starman"'])      # a registered name: refused too
+        edit = f"figure = {{ extends = {rng.choice(BAD_EXTENDS)}, name = {name} }}"
+        spec = _ref_spec(world, tmp, "study", _GP_CONF, edit)
+    else:
+        anchor = rng.choice([_TURN, 'name = "walk"\n', 'name = "walk2"\n'])
+        spec = _ref_spec(world, tmp, "staged", anchor, f"params = {{ after = "
+                                                       f"{rng.choice(BAD_AFTER)} }}")
+    return Case(["study", "run", spec, "--out", tmp / "o", "--quick", "--quiet"], tmp,
+                left_nothing=[tmp / "o"])
 
 
 def _fix_paths(doc, base: Path):

@@ -332,6 +332,10 @@ def _figure(value, where: str):
         if not isinstance(value.get("extends"), str) or not isinstance(value.get("name"), str):
             raise SpecError(f"{where}: a variant table needs extends = \"FIGURE\" and a name")
         plain_name(value["name"], f"{where}.name")
+        if value["name"] in figure_names():       # rows would label two figures alike
+            raise SpecError(f"{where}.name: {value['name']!r} is a registered figure; a "
+                            "variant needs a name of its own (figure = \"NAME\" runs the "
+                            "figure itself)")
         try:
             return resolve_spec(copy.deepcopy(value))
         except ValueError as e:
