@@ -50,7 +50,7 @@ import numpy as np
 from deap import gp
 
 from gpmotion.controllers import ControllerBatch
-from gpmotion.gp.interpreter import interpreter_path
+from gpmotion.gp.interpreter import interpreter_path, load_interpreter
 from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # noqa: F401 (re-exported)
                                  OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE, STACK_CAP,
                                  TARGET_MODES)
@@ -112,12 +112,16 @@ def _branch_layout(sel_frags, branch_frags, op):
     return out
 
 
-def compile_tree(tree, info: PsetInfo, lazy: bool = True
+def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True
                  ) -> tuple[list[tuple[int, int]], list[float], int]:
     """One tree -> (ops [(opcode, operand)], constants, max stack need).
 
     ``lazy``: conditional primitives evaluate only the branch taken (jumps);
     otherwise every argument is evaluated (the same value: primitives are pure).
+    ``fold``: a subtree that reads no state (constants only) becomes one
+    constant, computed by the generated kernel itself (:func:`_fold`), so the
+    tree's value is bitwise the one the unfolded ops give.  The stack cap is
+    checked on the unfolded need: folding never admits a tree.
     """
     prims = info.primitives
     prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
@@ -126,8 +130,9 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
     if not nodes:
         raise ValueError("empty tree")
     # prefix -> postfix: walk nodes right to left; a primitive closes its children.
-    # pending: stack of (ops, stack need); a constant op carries its value for now
-    pending: list[tuple[list, int]] = []
+    # pending: stack of (ops, stack need unfolded, stack need, reads no state);
+    # a constant op carries its value for now
+    pending: list[tuple[list, int, int, bool]] = []
     for node in reversed(nodes):
         if isinstance(node, gp.Primitive):
             if node.name not in prim_op:
@@ -136,25 +141,24 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
                 raise ValueError("malformed tree (missing arguments)")
             op, p = prim_op[node.name]
             children = [pending.pop() for _ in range(node.arity)]
-            if lazy and p.conditional:
-                sel = [children[i] for i in p.select]
-                br = [children[i] for i in p.branches]
-                ops = _branch_layout([c[0] for c in sel], [c[0] for c in br], op)
-                need = max(max(i + c[1] for i, c in enumerate(sel)), max(c[1] for c in br))
-            else:
-                ops = [x for ch in children for x in ch[0]] + [(op, 0)]
-                need = max(i + c[1] for i, c in enumerate(children))
-            pending.append((ops, need))
+            ops, raw, need = _node_ops(op, p, children, lazy)
+            const = all(c[3] for c in children)
+            if fold and const and raw <= STACK_CAP:
+                ops, need = [(OP_PUSH_CONST, _fold(info, ops))], 1
+            pending.append((ops, raw, need, const))
         elif is_erc(node):
-            pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1))
+            pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1, 1, True))
         elif isinstance(node, gp.Terminal) and node.value in term_sense:
             i = term_sense[node.value]                 # < 0: subgoal flag -1 - i
-            pending.append(([(OP_PUSH_SENSE, i) if i >= 0 else (OP_PUSH_FLAG, -1 - i)], 1))
+            pending.append(([(OP_PUSH_SENSE, i) if i >= 0 else (OP_PUSH_FLAG, -1 - i)],
+                            1, 1, False))
         else:
             raise ValueError(f"terminal {getattr(node, 'name', node)!r} is not in this primitive set")
     if len(pending) != 1:
         raise ValueError("malformed tree (not exactly one root)")
-    frag, need = pending[0]
+    frag, raw, need, _ = pending[0]
+    if raw > STACK_CAP:
+        need = raw
     if need > STACK_CAP:
         raise ValueError(f"tree needs a stack of {need} > {STACK_CAP}; "
                          "lower the depth limit")
@@ -169,9 +173,50 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True
     return ops, consts, need
 
 
+def _node_ops(op: int, p, children, lazy: bool):
+    """A primitive over its children's fragments -> (ops, unfolded need, need)."""
+    if lazy and p.conditional:
+        sel = [children[i] for i in p.select]
+        br = [children[i] for i in p.branches]
+        ops = _branch_layout([c[0] for c in sel], [c[0] for c in br], op)
+        needs = [max(max(i + c[k] for i, c in enumerate(sel)), max(c[k] for c in br))
+                 for k in (1, 2)]
+    else:
+        ops = [x for ch in children for x in ch[0]] + [(op, 0)]
+        needs = [max(i + c[k] for i, c in enumerate(children)) for k in (1, 2)]
+    return ops, needs[0], needs[1]
+
+
+def _fold(info: PsetInfo, frag) -> float:
+    """The value of a fragment that reads no state, from the generated
+    kernel's own ``run_tree`` (the same compiled float64 operations, clamp
+    and protected primitives as at run time: no second implementation)."""
+    consts = [arg for op, arg in frag if op == OP_PUSH_CONST]
+    ci, k = [1, 0, 0, 0, 0, 0, -1, HEADER + 3, len(frag)], 0
+    for op, arg in frag:
+        ci += [op, k if op == OP_PUSH_CONST else arg]
+        k += op == OP_PUSH_CONST
+    run_tree = _kernel(info).run_tree
+    return float(run_tree(np.asarray(ci, dtype=np.int64), np.asarray(consts + [0.0]),
+                          0, _NO_SENSES, np.zeros(STACK_CAP)))
+
+
+_NO_SENSES = np.zeros(1)
+_KERNELS: dict = {}
+
+
+def _kernel(info: PsetInfo):
+    """The generated interpreter module for ``info``'s primitives (imported once)."""
+    key = tuple(p.source for p in info.primitives)
+    if key not in _KERNELS:
+        _KERNELS[key] = load_interpreter(info)
+    return _KERNELS[key]
+
+
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
-                 law: TargetLaw | None = None, task_programs: Sequence = ()):
+                 law: TargetLaw | None = None, task_programs: Sequence = (),
+                 fold: bool = True):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
@@ -187,7 +232,7 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
         raise ValueError(f"{len(task_programs)} task sense programs for "
                          f"{len(info.task_sense_names)} task senses")
     n = len(trees)
-    compiled = [_compiled(t, info, lazy) for t in trees]
+    compiled = [_compiled(t, info, lazy, fold) for t in trees]
     programs = compiled + [tuple(p) for p in task_programs]
     ci = ([n, max((c[2] for c in programs), default=0), len(subgoals), 0, 0, len(task_programs)]
           + [0] * (3 * len(programs)))
@@ -219,31 +264,32 @@ _COMPILED: dict = {}
 _COMPILED_MAX = 100_000
 
 
-def _compiled(t, info: PsetInfo, lazy: bool):
+def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = True):
     if isinstance(t, gp.PrimitiveTree):
-        return compile_tree(t, info, lazy)
-    key = (info.hash, info.sense_indices, lazy, repr(list(t)))
+        return compile_tree(t, info, lazy, fold)
+    key = (info.hash, info.sense_indices, lazy, fold, repr(list(t)))
     hit = _COMPILED.get(key)
     if hit is None:
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.clear()
-        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy)
+        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy, fold)
     return hit
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
                  lazy: bool = True, subgoals=(), law: TargetLaw | None = None,
-                 task_programs=()) -> ControllerBatch:
+                 task_programs=(), fold: bool = True) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
-    as in :func:`compile_tree` (the eager form is for benchmarks); ``law``
-    and ``task_programs`` as in :func:`encode_trees`.
+    and ``fold`` as in :func:`compile_tree` (the eager and unfolded forms are
+    for benchmarks and tests); ``law`` and ``task_programs`` as in
+    :func:`encode_trees`.
     """
     if module is None:
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs)
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs, fold)
             for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])
