@@ -216,8 +216,19 @@ def compare(task_name, controllers, seeds, budget, out, *, actuation="pd", param
     spec = parse(comparison_spec(task, controllers, seeds, budget, actuation, params,
                                  population, family_options))
     out = check_out_dir(out, force, spec.digest())
-    rows = run_study(spec, out, spec.report_seeds, workers=max(1, workers or 0),
-                     scheduler=scheduler, quiet=quiet)
+    written = {}
+
+    def write(rows):            # under the study's lock: a second compare is refused
+        written["table"], written["md"] = _write_outputs(out, task, controllers, rows, seeds,
+                                                         budget, actuation, quiet)
+    run_study(spec, out, spec.report_seeds, workers=max(1, workers or 0), scheduler=scheduler,
+              quiet=quiet, locked=write)
+    return written["table"], written["md"]
+
+
+def _write_outputs(out: Path, task, controllers, rows, seeds, budget, actuation, quiet):
+    """best/, compare.csv, compare.md, runs.json and the curves from the ledger's rows
+    (each file atomic; the caller holds the folder's lock)."""
     (out / "best").mkdir(exist_ok=True)
     order = {name: i for i, name in enumerate(controllers)}
     rows = sorted(rows, key=lambda r: (order[r["config"]], r["seed"]))

@@ -249,9 +249,11 @@ class StudyRows(list):
 
 def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1,
               scheduler: str | None = None, runs: str | Path | None = None,
-              quiet: bool = False, progress=None, configs: list[str] | None = None) -> list[dict]:
+              quiet: bool = False, progress=None, configs: list[str] | None = None,
+              locked=None) -> list[dict]:
     """Run every job of ``seeds`` (of the configurations named in ``configs``,
-    default all) not yet in ``out``'s ledger; returns all rows."""
+    default all) not yet in ``out``'s ledger; returns all rows.  ``locked(rows)``,
+    when given, runs while ``out`` is still locked (a writer of files from the rows)."""
     from .ledger import StudyDir, row_key
     check(spec)
     unknown = sorted(set(configs or ()) - set(spec.configurations))
@@ -276,7 +278,10 @@ def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1
             what = str(e).split(";")[0] or "stopped"
             raise Stopped(f"{what}; the same `gpmotion study run` continues the study",
                           getattr(e, "code", 130)) from None
-        return StudyRows(sd.rows(), out)
+        rows = StudyRows(sd.rows(), out)
+        if locked is not None:
+            locked(rows)
+        return rows
 
 
 def _job(job: Job):
