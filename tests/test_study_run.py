@@ -196,3 +196,35 @@ def test_sigterm_checkpoints_and_names_the_study_command(tmp_path):
         pytest.skip("the study finished before the signal arrived")
     assert proc.returncode == 143 and "gpmotion study run" in err, err
     assert main(["study", "run", str(s), "--out", str(out), "--quiet"]) == 0
+
+
+def _children(pid: int) -> set[int]:
+    kids = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    return {int(k) for k in kids}
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_sigterm_with_workers_stops_them_and_the_rerun_completes(tmp_path):
+    s, out = spec(tmp_path, gens=400), tmp_path / "out"
+    proc = _gpm("study", "run", s, "--out", out, "--quiet", "--workers", "2")
+    t0 = time.time()
+    while len(list(out.glob("runs/*/checkpoint.json"))) < 2:
+        assert time.time() - t0 < 300, "the workers never checkpointed"
+        time.sleep(0.05)
+    kids = _children(proc.pid)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 143 and "gpmotion study run" in err, err
+    assert "Traceback" not in err, err
+    t0 = time.time()
+    while any(_alive(k) for k in kids):                 # no search left running unseen
+        assert time.time() - t0 < 60, "a worker outlived its study"
+        time.sleep(0.1)
+    assert main(["study", "run", str(s), "--out", str(out), "--quiet"]) == 0
+    assert len(read_rows(out)) == 6                     # 2 seeds × (1 + 2 starts)

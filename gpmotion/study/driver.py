@@ -21,6 +21,7 @@ import hashlib
 import io
 import json
 import os
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -273,7 +274,7 @@ def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1
                     sd.write_controller(name, rec)
                 sd.append(row)
                 progress.done(row, workers)
-        except KeyboardInterrupt as e:            # the run loop checkpointed (Ctrl-C, SIGTERM)
+        except (KeyboardInterrupt, WorkerStopped) as e:  # the run loop checkpointed (Ctrl-C, SIGTERM)
             from ..run import Stopped
             what = str(e).split(";")[0] or "stopped"
             raise Stopped(f"{what}; the same `gpmotion study run` continues the study",
@@ -284,8 +285,20 @@ def run_study(spec: Spec, out: str | Path, seeds: list[int], *, workers: int = 1
         return rows
 
 
+class WorkerStopped(Exception):
+    """A worker's search was stopped by a signal (it checkpointed): an
+    Exception, so the pool hands it back instead of printing a traceback."""
+
+    def __init__(self, msg: str, code: int = 130):
+        super().__init__(msg)
+        self.code = code
+
+
 def _job(job: Job):
-    return run_job(job)
+    try:
+        return run_job(job)
+    except KeyboardInterrupt as e:
+        raise WorkerStopped(str(e), getattr(e, "code", 130)) from None
 
 
 def _finished(todo: list[Job], workers: int):
@@ -306,7 +319,43 @@ def _finished(todo: list[Job], workers: int):
         else:
             os.environ["NUMBA_NUM_THREADS"] = old
     with pool:
-        yield from pool.imap_unordered(_job, todo)
+        yield from _pool_rows(pool, todo, min(workers, len(todo)), mp)
+
+
+def _pool_rows(pool, todo: list[Job], n: int, mp):
+    """At most ``n`` jobs in flight.  On SIGTERM or Ctrl-C: no new job starts,
+    each worker's run loop checkpoints (SIGTERM is passed on; Ctrl-C reaches
+    the whole process group), rows finished meanwhile are still yielded, then
+    WorkerStopped; leaving the pool ends the idle workers."""
+    stop: dict = {}
+
+    def on_signal(signum, frame):
+        if not stop and signum == signal.SIGTERM:
+            for child in mp.active_children():
+                os.kill(child.pid, signal.SIGTERM)
+        stop.setdefault("code", 128 + signum)
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    pending, running = list(todo), []
+    try:
+        while running or (pending and not stop):
+            while pending and len(running) < n and not stop:
+                running.append(pool.apply_async(_job, (pending.pop(0),)))
+            ready = [r for r in running if r.ready()]
+            if not ready:
+                time.sleep(0.05)
+                continue
+            for r in ready:
+                running.remove(r)
+                try:
+                    yield r.get()
+                except WorkerStopped as e:
+                    stop.setdefault("code", e.code)
+        if stop:
+            raise WorkerStopped("stopped", stop["code"])
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 class StudyProgress:
