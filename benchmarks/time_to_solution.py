@@ -22,6 +22,21 @@ Per task and seed, one run on the old defaults (generations 40 run in full:
 * ``finish_s``: of the wall time, what the end of the run took (replay of
   the best, best.json and, with ``--artifacts``, the pictures and report).
 
+``--episodes`` adds where the simulated steps went, to decide which
+episodes could stop early (each a count of simulated steps):
+
+* ``div_ran``: steps run by episodes that diverged (the kernel already ends
+  an episode at the step its state turns non-finite or beyond 1e4;
+  ``div_saved`` is what that stop saves against full episodes);
+* ``fell_after``: steps after a planar figure's base first pitched beyond
+  1 rad (the lamp's "fell"): what a stop at a final fall would save;
+* ``rejected``/``rej_after`` (serial searches): mutants whose cost did not
+  beat their parent's (strict replacement rejects them), and their steps
+  after the first frame where a lower bound of the cost from the frames so
+  far reached the parent's cost.  The bound is the monotone part of the lamp
+  terms (late, head_hit, fell, pole; every other term bounded by 0), so
+  lamp tasks only.
+
 Seconds depend on the machine and its load; steps and the ratios do not.
 """
 from __future__ import annotations
@@ -99,6 +114,91 @@ class KernelMeter:
         event.unregister("numba:compile", self._compiles)
 
 
+EPISODE_COLUMNS = ("div_ran", "div_saved", "fell_after", "mutants", "rejected", "rej_after")
+
+
+class EpisodeMeter:
+    """Wraps Task.score and SerialSearch.tell: where the steps of scored batches went."""
+
+    def __init__(self):
+        self.div_ran = self.div_saved = self.fell_after = 0
+        self.rejected = self.mutants = self.rej_after = 0
+        self._last = None                  # (task, traj, progress) of the last score
+
+    def __enter__(self):
+        from gpmotion.search.serial import SerialSearch
+        from gpmotion.task import Task
+        self._score, self._tell = Task.score, SerialSearch.tell
+        meter = self
+
+        def score(task, traj, progress=1.0):
+            out = meter._score(task, traj, progress)
+            meter._count(task, traj)
+            meter._last = (task, traj, progress)
+            return out
+
+        def tell(search, ev):
+            if search.working is not None and not (search.rescoring or search.restarting):
+                meter._serial(np.array(search.scores, float), np.asarray(ev.costs, float))
+            return meter._tell(search, ev)
+        Task.score, SerialSearch.tell = score, tell
+        return self
+
+    def __exit__(self, *exc):
+        from gpmotion.search.serial import SerialSearch
+        from gpmotion.task import Task
+        Task.score, SerialSearch.tell = self._score, self._tell
+
+    @staticmethod
+    def _ran(traj):
+        full = (len(traj.times) - 1) * traj.record_every
+        return np.where(traj.diverged, traj.diverged_step + 1, full), full
+
+    def _count(self, task, traj):
+        ran, full = self._ran(traj)
+        self.div_ran += int(ran[traj.diverged].sum())
+        self.div_saved += int((full - ran[traj.diverged]).sum())
+        if traj.is3d:
+            return
+        fallen = np.abs(traj.base()[..., 0]) > 1.0          # [E, F]
+        first = np.where(fallen.any(axis=1), fallen.argmax(axis=1), len(traj.times) - 1)
+        self.fell_after += int(np.maximum(ran - first * traj.record_every, 0).sum())
+
+    def _serial(self, parents, costs):
+        task, traj, progress = self._last
+        self.mutants += costs.size
+        rejected = ~(costs < parents)
+        self.rejected += int(rejected.sum())
+        if "distance" not in task.params or traj.is3d:
+            return
+        bound = lamp_bound(task, traj, progress)               # [E, F]
+        reached = bound >= parents[:, None]
+        first = np.where(reached.any(axis=1), reached.argmax(axis=1), len(traj.times) - 1)
+        ran, _ = self._ran(traj)
+        after = np.maximum(ran - first * traj.record_every, 0)
+        assert np.all(reached.any(axis=1) <= rejected)          # a true bound never rejects a better one
+        self.rej_after += int(after[rejected].sum())
+
+
+def lamp_bound(task, traj, progress):
+    """A lower bound of each lamp episode's cost from frames 0..f, for every f [E, F]."""
+    from gpmotion.tasks.lamp_hop import ARRIVED
+    w = {t.name: t.weight * t.factor(progress) for t in task.terms}
+    fig = traj.figure
+    d = np.linalg.norm(traj.site("base_centre") - np.array([task.params["distance"], 0.0]), axis=-1)
+    arrived = np.logical_or.accumulate(d < ARRIVED, axis=1)
+    late = np.where(arrived, 0.0, traj.times[None, :] / task.seconds)
+    heads = [fig.contact_names.index(c) for c in ("head_tip", "head_rim")]
+    force = np.maximum.accumulate(traj.contact_force[..., heads].max(axis=2), axis=1)
+    head = (force > 0) + force / (fig.total_mass * 9.81)
+    fell = np.maximum.accumulate(np.abs(traj.base()[..., 0]), axis=1) > 1.0
+    b = w["late"] * late + w["head_hit"] * head + w["fell"] * fell
+    if "pole" in w:
+        pen = np.maximum.accumulate(traj.pole_hit, axis=1)
+        b = b + w["pole"] * ((pen > 0) + 100.0 * pen)
+    return np.where(traj.diverged[:, None], -np.inf, b)      # a diverged one costs WORST anyway
+
+
 def jit_signatures() -> int:
     """Compiled signatures of every numba dispatcher alive in this process."""
     from numba.core.registry import CPUDispatcher
@@ -118,21 +218,27 @@ def _timed_finish(spent: list):
     return finish
 
 
-def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: bool) -> dict:
+def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: bool,
+            family: str | None = None, episodes: bool = False) -> dict:
     spent: list[float] = []
     orig_finish = run_module._finish
     run_module._finish = _timed_finish(spent)
     try:
-        return _one_run(task, seed, search, threads, artifacts, spent)
+        if not episodes:
+            return _one_run(task, seed, search, threads, artifacts, spent, family)
+        with EpisodeMeter() as em:
+            r = _one_run(task, seed, search, threads, artifacts, spent, family)
+        return {**r, **{k: getattr(em, k) for k in EPISODE_COLUMNS}}
     finally:
         run_module._finish = orig_finish
 
 
-def _one_run(task, seed, search, threads, artifacts, spent) -> dict:
+def _one_run(task, seed, search, threads, artifacts, spent, family=None) -> dict:
     with tempfile.TemporaryDirectory() as d, KernelMeter() as meter:
         out = Path(d) / "run"
         t0 = time.perf_counter()
-        run(RunConfig(task=task, seed=seed, search=search, threads=threads), out, quiet=True,
+        fam = {} if family is None else {"family": family}
+        run(RunConfig(task=task, seed=seed, search=search, threads=threads, **fam), out, quiet=True,
             artifacts=artifacts)
         wall = time.perf_counter() - t0
         best = read_json(out / "best.json", kind="best")
@@ -169,6 +275,9 @@ def main(argv=None):
     ap.add_argument("--search", action="append", default=[], metavar="KEY=VALUE",
                     help="a search setting of the new runs (JSON value)")
     ap.add_argument("--artifacts", action="store_true", help="draw the pictures, as `gpmotion run`")
+    ap.add_argument("--family", default=None, help="controller family (default: gp)")
+    ap.add_argument("--episodes", action="store_true",
+                    help="also where the steps went (diverged, fallen, rejected mutants)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     new = {k: _value(v) for k, v in (s.split("=", 1) for s in a.search)}
@@ -181,7 +290,8 @@ def main(argv=None):
             for kind in kinds:
                 old = {**OLD, **({"generations": OLD_GENERATIONS[task]}
                                  if task in OLD_GENERATIONS else {})}
-                r = one_run(task, seed, old if kind == "old" else new, a.threads, a.artifacts)
+                r = one_run(task, seed, old if kind == "old" else new, a.threads, a.artifacts,
+                            a.family, a.episodes)
                 r["defaults"] = kind
                 rows.append(r)
                 print(f"{task:<22}{seed:>5} {kind:<4}{r['generations']:>5}{r['evals']:>7}"
@@ -190,6 +300,10 @@ def main(argv=None):
                       f"{r['cost']:>8.4f}{'yes' if r['ok'] else 'no':>4}{r['wall_s']:>8.1f}"
                       f"{r['outside']:>8.1%}{r['kernels']:>5} ({r['compiled']}){r['jit']:>5}{r['finish_s']:>9.1f}",
                       file=sys.stderr, flush=True)
+                if a.episodes:
+                    print("    " + "  ".join(f"{k} {r[k] / 1e6:.2f}M" if k not in ("mutants", "rejected")
+                                             else f"{k} {r[k]}" for k in EPISODE_COLUMNS),
+                          file=sys.stderr, flush=True)
     if a.json:
         print(json.dumps(rows, indent=1))
 
