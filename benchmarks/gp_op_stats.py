@@ -2,8 +2,8 @@
 fused instruction pairs could save.
 
 Reads the controller records (best.json files) under the given folders,
-encodes every tree as the kernel runs it, and prints: ops per tree with and
-without constant folding, the share of ops inside constant subtrees, and the
+encodes every tree as the kernel runs it, and prints: ops per tree plain,
+folded, and folded with fused "sense, apply" pairs, the share of ops inside constant subtrees, and the
 most frequent adjacent opcode pairs (by opcode class: sense, const, flag,
 jump, primitive name with apply/select).  Static counts, not weighted by the
 branches an episode takes.
@@ -16,7 +16,7 @@ import collections
 from pathlib import Path
 
 from gpmotion.gp.bytecode import compile_tree, tokens_to_tree
-from gpmotion.gp.opcodes import OP_JUMP, OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG, OP_PUSH_SENSE
+from gpmotion.gp.opcodes import OP_ARG_SENSE0, OP_JUMP, OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG, OP_PUSH_SENSE
 from gpmotion.replay import load_controller
 
 
@@ -29,16 +29,18 @@ def op_name(op, arg, info):
         return "flag"
     if op == OP_JUMP:
         return "jump"
-    return info.primitives[op - OP_PRIM0].name + ("?" if arg else "")
+    name = info.primitives[op - OP_PRIM0].name
+    return name + ("?" if arg == 1 else "+sense" if arg >= OP_ARG_SENSE0 else "")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folders", nargs="+")
     ap.add_argument("--top", type=int, default=15)
+    ap.add_argument("--fuse", action="store_true", help="pairs of the fused form")
     args = ap.parse_args(argv)
     pairs, singles = collections.Counter(), collections.Counter()
-    n_trees = ops_plain = ops_fold = 0
+    n_trees = ops_plain = ops_fold = ops_fuse = 0
     for folder in args.folders:
         for path in sorted(Path(folder).glob("*.json")):
             task, fam, _, genome, _ = load_controller(path)
@@ -46,15 +48,19 @@ def main(argv=None):
                 continue
             for tokens in genome:
                 tree = tokens_to_tree(tokens, fam.info)
-                ops = compile_tree(tree, fam.info, fold=False)[0]
+                ops = compile_tree(tree, fam.info, fold=False, fuse=False)[0]
                 ops_plain += len(ops)
-                ops_fold += len(compile_tree(tree, fam.info, fold=True)[0])
+                ops_fold += len(compile_tree(tree, fam.info, fold=True, fuse=False)[0])
+                fused = compile_tree(tree, fam.info, fold=True, fuse=True)[0]
+                ops_fuse += len(fused)
+                ops = fused if args.fuse else ops
                 n_trees += 1
                 names = [op_name(o, a, fam.info) for o, a in ops]
                 singles.update(names)
                 pairs.update(zip(names, names[1:]))
     print(f"{n_trees} trees; ops per tree {ops_plain / n_trees:.1f} plain, "
-          f"{ops_fold / n_trees:.1f} folded ({1 - ops_fold / ops_plain:.1%} fewer)")
+          f"{ops_fold / n_trees:.1f} folded ({1 - ops_fold / ops_plain:.1%} fewer), "
+          f"{ops_fuse / n_trees:.1f} folded and fused ({1 - ops_fuse / ops_plain:.1%} fewer)")
     total = sum(singles.values())
     print("opcodes:", ", ".join(f"{k} {v / total:.1%}" for k, v in singles.most_common()))
     total = sum(pairs.values())

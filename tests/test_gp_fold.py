@@ -1,7 +1,8 @@
-"""Constant folding at encode time (gpmotion.gp.bytecode.compile_tree, fold=True):
-a subtree that reads no state becomes one constant, and every tree gives
-bitwise the value its unfolded ops give, in the generated kernel and in the
-plain reference interpreter."""
+"""Encode-time constant folding and fused pairs (gpmotion.gp.bytecode.compile_tree,
+fold=True, fuse=True): a subtree that reads no state becomes one constant, a
+primitive whose last argument is a sense reads it itself, and every tree
+gives bitwise the value its plain ops give, in the generated kernel and in
+the plain reference interpreter."""
 import random
 
 import numpy as np
@@ -11,10 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gpmotion.gp import primitives as registry
-from gpmotion.gp.bytecode import (HEADER, OP_PUSH_CONST, STACK_CAP, compile_tree, encode_batch,
+from gpmotion.gp.bytecode import (HEADER, OP_ARG_SENSE0, OP_PUSH_CONST, STACK_CAP, compile_tree, encode_batch,
                                   encode_trees, tokens_to_tree, tree_to_tokens)
 from gpmotion.gp.interpreter import load_interpreter
 from gpmotion.gp.pset import build_pset
+from tests.reference.gp_interpreter_ref import run_tree_ref
 
 SENSES = ["px", "pz", "vx", "t"]
 TERMS = ["px", "vx", "t"]
@@ -108,3 +110,30 @@ def test_folding_admits_no_tree_over_the_stack_cap():
     deep = tokens_to_tree(["add", 1.0] * 64 + [1.0], INFO, max_depth=70)
     with pytest.raises(ValueError, match="stack of 65"):
         compile_tree(deep, INFO, lazy=False)
+
+
+@settings(deadline=None, max_examples=100)
+@given(seed=st.integers(0, 2**32 - 1), p_const=st.floats(0.0, 0.6), depth=st.integers(1, 6),
+       lazy=st.booleans(), s=senses)
+def test_fused_pairs_give_bitwise_the_plain_value(seed, p_const, depth, lazy, s):
+    """"Push sense, apply" fused into one op: the kernel and the plain reference
+    interpreter each give bitwise what they give on the plain stream."""
+    tree = tokens_to_tree(random_tokens(seed, p_const, depth), INFO)
+    s = np.array(s)
+    plain = encode_trees([tree], INFO, [0], lazy=lazy, fold=False, fuse=False)
+    fused = encode_trees([tree], INFO, [0], lazy=lazy, fold=True, fuse=True)
+    assert bits(run(*fused, s)) == bits(run(*plain, s))
+    funcs = [p.func for p in INFO.primitives]
+    selects = [p.select for p in INFO.primitives]
+    assert (bits(run_tree_ref(*fused, 0, s, funcs, selects))
+            == bits(run_tree_ref(*plain, 0, s, funcs, selects)))
+
+
+def test_a_primitive_over_a_sense_is_one_op():
+    """px, add+vx, sin+t, sub: six plain ops become four."""
+    tree = tokens_to_tree(["sub", "add", "px", "vx", "sin", "t"], INFO)
+    ops = compile_tree(tree, INFO, fuse=True)[0]
+    assert [a >= OP_ARG_SENSE0 for _, a in ops] == [False, True, True, False]
+    (px, _), (add, vx), (sin, t), sub = ops
+    assert compile_tree(tree, INFO, fuse=False)[0] == [
+        (0, px), (0, vx - OP_ARG_SENSE0), (add, 0), (0, t - OP_ARG_SENSE0), (sin, 0), sub]

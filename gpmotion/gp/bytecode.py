@@ -28,7 +28,9 @@ Layout of one episode's ``ci`` (int64) / ``cf`` (float64)::
         opcode 4+k   primitive k of the pset; operand 0: pop all its
                      arguments, push its result; operand 1 (conditionals
                      only): pop its selectors and go to the branch taken
-                     through the jump table that follows (``_branch_layout``)
+                     through the jump table that follows (``_branch_layout``);
+                     operand 2 + i: push clamp(senses[i]) first (a fused
+                     pair: its last argument is sense i)
 
 A zero row (padding) has n_trees = 0 and drives nothing.  ``cstate`` is the
 interpreter's stack (STACK_CAP slots), MAX_SUBGOALS flag slots,
@@ -51,9 +53,9 @@ from deap import gp
 
 from gpmotion.controllers import ControllerBatch
 from gpmotion.gp.interpreter import interpreter_path, load_interpreter
-from gpmotion.gp.opcodes import (HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_CONST,  # noqa: F401 (re-exported)
-                                 OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE, STACK_CAP,
-                                 TARGET_MODES)
+from gpmotion.gp.opcodes import (HEADER, OP_ARG_SENSE0, OP_JUMP,  # noqa: F401 (re-exported)
+                                 OP_PRIM0, OP_PUSH_CONST, OP_PUSH_FLAG, OP_PUSH_SENSE, RATE_STATE,
+                                 STACK_CAP, TARGET_MODES)
 from gpmotion.gp.primitives import clamp
 from gpmotion.gp.pset import PsetInfo
 from gpmotion.gp.subgoals import MAX_SUBGOALS
@@ -112,8 +114,8 @@ def _branch_layout(sel_frags, branch_frags, op):
     return out
 
 
-def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True
-                 ) -> tuple[list[tuple[int, int]], list[float], int]:
+def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True,
+                 fuse: bool = True) -> tuple[list[tuple[int, int]], list[float], int]:
     """One tree -> (ops [(opcode, operand)], constants, max stack need).
 
     ``lazy``: conditional primitives evaluate only the branch taken (jumps);
@@ -121,7 +123,9 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True
     ``fold``: a subtree that reads no state (constants only) becomes one
     constant, computed by the generated kernel itself (:func:`_fold`), so the
     tree's value is bitwise the one the unfolded ops give.  The stack cap is
-    checked on the unfolded need: folding never admits a tree.
+    checked on the unfolded need: folding never admits a tree.  ``fuse``: a
+    primitive whose last argument is a sense reads it itself (operand
+    OP_ARG_SENSE0 + sense), one op for the pair.
     """
     prims = info.primitives
     prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
@@ -141,7 +145,7 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True
                 raise ValueError("malformed tree (missing arguments)")
             op, p = prim_op[node.name]
             children = [pending.pop() for _ in range(node.arity)]
-            ops, raw, need = _node_ops(op, p, children, lazy)
+            ops, raw, need = _node_ops(op, p, children, lazy, fuse)
             const = all(c[3] for c in children)
             if fold and const and raw <= STACK_CAP:
                 ops, need = [(OP_PUSH_CONST, _fold(info, ops))], 1
@@ -173,7 +177,7 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True
     return ops, consts, need
 
 
-def _node_ops(op: int, p, children, lazy: bool):
+def _node_ops(op: int, p, children, lazy: bool, fuse: bool):
     """A primitive over its children's fragments -> (ops, unfolded need, need)."""
     if lazy and p.conditional:
         sel = [children[i] for i in p.select]
@@ -183,6 +187,8 @@ def _node_ops(op: int, p, children, lazy: bool):
                  for k in (1, 2)]
     else:
         ops = [x for ch in children for x in ch[0]] + [(op, 0)]
+        if fuse and len(children[-1][0]) == 1 and ops[-2][0] == OP_PUSH_SENSE:
+            ops[-2:] = [(op, OP_ARG_SENSE0 + ops[-2][1])]
         needs = [max(i + c[k] for i, c in enumerate(children)) for k in (1, 2)]
     return ops, needs[0], needs[1]
 
@@ -216,7 +222,7 @@ def _kernel(info: PsetInfo):
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
                  law: TargetLaw | None = None, task_programs: Sequence = (),
-                 fold: bool = True):
+                 fold: bool = True, fuse: bool = True):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
@@ -232,7 +238,7 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
         raise ValueError(f"{len(task_programs)} task sense programs for "
                          f"{len(info.task_sense_names)} task senses")
     n = len(trees)
-    compiled = [_compiled(t, info, lazy, fold) for t in trees]
+    compiled = [_compiled(t, info, lazy, fold, fuse) for t in trees]
     programs = compiled + [tuple(p) for p in task_programs]
     ci = ([n, max((c[2] for c in programs), default=0), len(subgoals), 0, 0, len(task_programs)]
           + [0] * (3 * len(programs)))
@@ -264,32 +270,33 @@ _COMPILED: dict = {}
 _COMPILED_MAX = 100_000
 
 
-def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = True):
+def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = True, fuse: bool = True):
     if isinstance(t, gp.PrimitiveTree):
-        return compile_tree(t, info, lazy, fold)
-    key = (info.hash, info.sense_indices, lazy, fold, repr(list(t)))
+        return compile_tree(t, info, lazy, fold, fuse)
+    key = (info.hash, info.sense_indices, lazy, fold, fuse, repr(list(t)))
     hit = _COMPILED.get(key)
     if hit is None:
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.clear()
-        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy, fold)
+        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy, fold, fuse)
     return hit
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
                  lazy: bool = True, subgoals=(), law: TargetLaw | None = None,
-                 task_programs=(), fold: bool = True) -> ControllerBatch:
+                 task_programs=(), fold: bool = True, fuse: bool = True) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
-    and ``fold`` as in :func:`compile_tree` (the eager and unfolded forms are
+    ``fold`` and ``fuse`` as in :func:`compile_tree` (the other forms are
     for benchmarks and tests); ``law`` and ``task_programs`` as in
     :func:`encode_trees`.
     """
     if module is None:
         module = str(interpreter_path(info))
-    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs, fold)
+    rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs, fold,
+                         fuse)
             for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])

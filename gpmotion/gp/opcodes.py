@@ -13,5 +13,8 @@ TARGET_MODES = {"angle": "a tree's output is its joint's target angle",
 # OP_PUSH_FLAG reads a value the controller keeps: subgoal flag j (j < MAX_SUBGOALS)
 # or task sense j - MAX_SUBGOALS
 OP_PUSH_SENSE, OP_PUSH_CONST, OP_JUMP, OP_PUSH_FLAG, OP_PRIM0 = 0, 1, 2, 3, 4
+# a primitive's operand: 0 apply, 1 select (conditionals), OP_ARG_SENSE0 + i: push
+# sense i then apply (one fused dispatch for the pair)
+OP_ARG_SENSE0 = 2
 LAW_WIDTH = 4           # law block per tree: mode code, gain, a, b
 RATE_STATE = 2          # rate/pi cstate slots before one value a tree: previous t, started

@@ -7,7 +7,8 @@ same value rule: senses and primitive results pass through ``clamp``
 (subgoal flag j in slot j, task sense j in slot MAX_SUBGOALS + j),
 4 + k primitive k (operand
 0: apply; operand 1: a conditional's selection: branch 0 skips the jump
-table that follows, branch j > 0 takes the table's jump j - 1).
+table that follows, branch j > 0 takes the table's jump j - 1; operand
+2 + i: push sense i, then apply).
 """
 from gpmotion.gp.primitives import clamp
 
@@ -39,7 +40,11 @@ def run_tree_ref(ci, cf, tree_index, senses, funcs, selects=None, stack_cap=64, 
             if arg < 0 or pos + 2 * arg > end:
                 return 0.0
             pos += 2 * arg
-        elif 4 <= op < 4 + len(funcs) and arg == 0:
+        elif 4 <= op < 4 + len(funcs) and (arg == 0 or arg >= 2):
+            if arg >= 2:                        # fused: push sense arg - 2, then apply
+                if len(stack) >= stack_cap:
+                    return 0.0
+                stack.append(clamp(senses[arg - 2]))
             f = funcs[op - 4]
             n = f.__code__.co_argcount
             if len(stack) < n:
