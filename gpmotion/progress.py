@@ -3,9 +3,14 @@ one a second), with the log row's numbers under the log's names, and a note
 before a kernel compiles for the first time on this machine.
 
 Generations are numbered as log.csv numbers them, from 0 (the first population
-or working set) for every controller family.  ``evals/s`` is the recent rate
-(over the last few seconds), not an average since the start, which the first
-generation's compilation would drag down for the whole run.
+or working set) for every controller family.  ``evals/s`` is the recent rate:
+evaluations per second over the last ``RATE_WINDOW_S`` seconds of wall time (at
+least the last generation), not an average since the start, which the first
+generation's compilation would drag down for the whole run.  log.csv records
+the same number in its ``recent_evals_per_s`` column (the average since the
+start is ``evaluations / elapsed_s``).  A log begun by an older gpmotion has an
+``evals_per_s`` column instead, the average since the start: a resume goes on
+filling it with that average, so each column keeps one meaning.
 """
 from __future__ import annotations
 
@@ -17,6 +22,16 @@ from collections import deque
 import numpy as np
 
 RATE_WINDOW_S = 5.0          # evals/s is measured over about this much recent time
+RATE_COLUMN = "recent_evals_per_s"          # log.csv: the progress line's evals/s
+LEGACY_RATE_COLUMN = "evals_per_s"          # older logs: the average since the start
+
+
+def rate_cell(rate: float, evals_total: int, elapsed: float, legacy: bool) -> dict:
+    """log.csv's rate cell: the recent rate, or in a log begun with the legacy
+    column, that column's own meaning (the average since the start)."""
+    if legacy:
+        return {LEGACY_RATE_COLUMN: round(evals_total / elapsed, 1) if elapsed > 0 else ""}
+    return {RATE_COLUMN: round(rate, 1)}
 
 
 class Progress:
@@ -53,14 +68,21 @@ class Progress:
         (t_a, n_a), (t_b, n_b) = self._recent[0], self._recent[-1]
         return (n_b - n_a) / (t_b - t_a) if t_b > t_a else 0.0
 
-    def update(self, gen: int, ev, best: float, row: dict | None = None):
-        """After a generation: ``gen`` its number (the log row's ``generation``)."""
-        self.evals += len(ev.costs)
+    def count(self, n: int, now: float | None = None) -> float:
+        """``n`` evaluations just made; the recent rate (the log row's, too)."""
+        self.evals += n
+        return self.rate(time.perf_counter() if now is None else now)
+
+    def update(self, gen: int, ev, best: float, row: dict | None = None,
+               rate: float | None = None):
+        """After a generation: ``gen`` its number (the log row's ``generation``);
+        ``rate`` what :meth:`count` gave for it (counted here when None)."""
+        now = time.perf_counter()
+        if rate is None:
+            rate = self.count(len(ev.costs), now)
         if self.quiet:
             return
-        now = time.perf_counter()
         eta = self.eta(gen, now)
-        rate = self.rate(now)
         last = gen >= self.total
         if now - self._shown < self.every and not last:
             return

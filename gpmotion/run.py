@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .inprocess import spec_of
-from .progress import CompileNote, Progress
+from .progress import LEGACY_RATE_COLUMN, CompileNote, Progress, rate_cell
 from .bsr.genome import MAX_RULES
 from .version import __version__
 from .families import make_family, recorded_options
@@ -110,11 +110,11 @@ def phase_line(task: Task, search) -> str:
 
 # ------------------------------------------------------------------ the loop
 
-def _log_row(search, evals_total: int, elapsed: float) -> dict:
+def _log_row(search, evals_total: int, elapsed: float, rate: float,
+             legacy_rate: bool = False) -> dict:
     row = search.row()
     return {"generation": row.pop("generation"), "evaluations": evals_total, **row,
-            "evals_per_s": round(evals_total / elapsed, 1) if elapsed > 0 else "",
-            "elapsed_s": round(elapsed, 3)}
+            **rate_cell(rate, evals_total, elapsed, legacy_rate), "elapsed_s": round(elapsed, 3)}
 
 
 def _checkpoint_every(value) -> float:
@@ -132,6 +132,7 @@ class _Recorder:
         self.rows: list[dict] = []
         self.gens: list[dict] = []         # generations.jsonl records, flushed with the rows
         self.film = None                   # a GenerationRecorder
+        self.legacy_rate = False           # the log's header has the old evals_per_s column
         self.last = time.monotonic()
 
     def add(self, row: dict):
@@ -406,6 +407,7 @@ def _restore(rd: RunDir, doc: dict, search) -> _Recorder:
     rec = _Recorder(rd, ident, n_rows, evals, CHECKPOINT_EVERY_S)
     rec.elapsed0 = float(elapsed)
     rec.trim = n_rows
+    rec.legacy_rate = bool(rows) and LEGACY_RATE_COLUMN in rows[0]   # keeps its meaning
     return rec
 
 
@@ -463,14 +465,16 @@ def _loop(evaluator, search, rec: _Recorder, quiet, max_generations):
             ev = evaluator.evaluate(genomes, search.progress, generation=search.generation)
             told = False
             search.tell(ev)
-            row = _log_row(search, rec.evals + len(genomes), time.perf_counter() - t0)
+            rate = prog.count(len(genomes))
+            row = _log_row(search, rec.evals + len(genomes), time.perf_counter() - t0, rate,
+                           rec.legacy_rate)
             rec.add(row)
             rec.note(search, genomes, ev)
             told = True
             done_now += 1
             if search.done or stop["sig"] is not None or rec.due():
                 rec.flush(search, time.perf_counter() - t0)
-            prog.update(row["generation"], ev, search.best_cost, row)
+            prog.update(row["generation"], ev, search.best_cost, row, rate)
     except RuntimeError as e:                 # WorkerLost, SchedulerLost: name the run to resume
         if type(e).__name__ in ("WorkerLost", "SchedulerLost"):
             raise type(e)(f"{e}; the checkpoint is intact: `gpmotion resume {rec.rd.current_path}` "

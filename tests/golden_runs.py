@@ -28,7 +28,7 @@ RUNS = {
 }
 
 # timing and environment columns/keys: not results
-LOG_SKIP = {"evals_per_s", "elapsed_s"}
+LOG_SKIP = {"evals_per_s", "recent_evals_per_s", "elapsed_s"}
 BEST_SKIP = {"version", "plugins"}
 
 

@@ -133,3 +133,39 @@ def test_a_stopped_run_names_the_generation_its_log_ends_at(tmp_path, monkeypatc
         run(cfg, tmp_path / "r", quiet=True, artifacts=False)
     rows = list(csv.DictReader(open(tmp_path / "r" / "log.csv")))
     assert [r["generation"] for r in rows] == ["0"]
+
+
+RATE = re.compile(r"([\d,]+) evals/s")
+
+
+def test_the_log_records_the_rate_the_progress_line_shows(tmp_path, capsys):
+    """log.csv's recent_evals_per_s is the progress line's evals/s (the recent rate),
+    not an average since the start under a name that does not say so."""
+    out = tmp_path / "r"
+    assert main(["run", "lamp_hop", "--out", str(out), "--param", "seconds=0.2",
+                 "--population", "4", "--generations", "2", "--no-artifacts"]) == 0
+    shown = [float(m.group(1).replace(",", "")) for m in
+             map(RATE.search, capsys.readouterr().err.splitlines()) if m]
+    rows = list(csv.DictReader(open(out / "log.csv")))
+    assert "recent_evals_per_s" in rows[0] and "evals_per_s" not in rows[0]
+    assert abs(float(rows[-1]["recent_evals_per_s"]) - shown[-1]) <= 0.55   # "%.0f" of it
+
+
+def test_a_log_begun_by_an_older_gpmotion_keeps_its_column_and_its_meaning(tmp_path):
+    """A run written before the column was renamed resumes: its header stays, and the
+    rows it gains fill evals_per_s with what that column always held, the average."""
+    import shutil
+    from pathlib import Path
+    old = tmp_path / "old"
+    shutil.copytree(Path(__file__).parent / "data" / "old_run_lamp_hop", old)
+    header = (old / "log.csv").read_text().splitlines()[0]
+    assert "evals_per_s" in header.split(",")
+    assert main(["resume", str(old), "--extend-generations", "2", "--quiet"]) == 0
+    lines = (old / "log.csv").read_text().splitlines()
+    assert lines[0] == header
+    rows = list(csv.DictReader(lines))
+    assert len(rows) == len(lines) - 1 and all(None not in r.values() for r in rows)
+    assert int(rows[-1]["generation"]) == int(rows[-3]["generation"]) + 2
+    for r in rows[-2:]:
+        average = int(r["evaluations"]) / float(r["elapsed_s"])
+        assert float(r["evals_per_s"]) == pytest.approx(average, rel=0.01, abs=0.1)

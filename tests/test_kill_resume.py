@@ -35,7 +35,7 @@ def wait_for(path: Path, timeout=180):
 
 def log_without_time(path):
     rows = [r.split(",") for r in Path(path).read_text().splitlines()]
-    keep = [i for i, name in enumerate(rows[0]) if name not in ("evals_per_s", "elapsed_s")]
+    keep = [i for i, name in enumerate(rows[0]) if name not in ("evals_per_s", "recent_evals_per_s", "elapsed_s")]
     return [[r[i] for i in keep] for r in rows]
 
 
