@@ -9,8 +9,8 @@ Two populations of the lamp's GP controllers:
 * ``random``: ``--pop`` first-generation individuals of ``lamp_hop``'s GP
   family (ramped half-and-half, seed 0), the population a search starts from.
 
-Each population is encoded in three forms -- plain, folded, folded and
-fused -- and rolled out on one thread, the forms in turn (best of
+Each population is encoded in four forms -- plain, folded, fused (the
+default), folded and fused -- and rolled out on one thread, the forms in turn (best of
 ``--repeats``); the targets and states they give are checked bitwise equal.
 Also printed: ops per tree, and the interpreter alone (``run_tree`` over
 20,000 random sense vectors a tree).
@@ -35,7 +35,7 @@ FOLDERS = ["gpmotion/studies/gritz-hahn-lamp/controllers",
 
 
 FORMS = {"plain": dict(fold=False, fuse=False), "fold": dict(fold=True, fuse=False),
-         "fold+fuse": dict(fold=True, fuse=True)}
+         "fuse": dict(fold=False, fuse=True), "fold+fuse": dict(fold=True, fuse=True)}
 
 
 def encode(fam, genomes, form):

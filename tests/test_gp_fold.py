@@ -1,8 +1,8 @@
-"""Encode-time constant folding and fused pairs (gpmotion.gp.bytecode.compile_tree,
-fold=True, fuse=True): a subtree that reads no state becomes one constant, a
-primitive whose last argument is a sense reads it itself, and every tree
-gives bitwise the value its plain ops give, in the generated kernel and in
-the plain reference interpreter."""
+"""Encode-time constant folding (opt-in) and fused pairs (the default) in
+gpmotion.gp.bytecode.compile_tree: a subtree that reads no state becomes one
+constant, a primitive whose last argument is a sense reads it itself, and
+every tree gives bitwise the value its plain ops give, in the generated
+kernel and in the plain reference interpreter."""
 import random
 
 import numpy as np
@@ -100,16 +100,17 @@ def test_a_constant_subtree_becomes_one_constant(sub):
 
 
 def test_a_constant_tree_folds_to_one_op_and_state_is_never_folded():
-    ops, consts, need = compile_tree(tokens_to_tree(["sub", "cos", 1.0, -2.5], INFO), INFO)
+    ops, consts, need = compile_tree(tokens_to_tree(["sub", "cos", 1.0, -2.5], INFO), INFO,
+                                     fold=True)
     assert len(ops) == 1 and need == 1 and len(consts) == 1
     keep = tokens_to_tree(["add", "t", "mul", "px", 2.0], INFO)
-    assert compile_tree(keep, INFO) == compile_tree(keep, INFO, fold=False)
+    assert compile_tree(keep, INFO, fold=True) == compile_tree(keep, INFO, fold=False)
 
 
 def test_folding_admits_no_tree_over_the_stack_cap():
     deep = tokens_to_tree(["add", 1.0] * 64 + [1.0], INFO, max_depth=70)
     with pytest.raises(ValueError, match="stack of 65"):
-        compile_tree(deep, INFO, lazy=False)
+        compile_tree(deep, INFO, lazy=False, fold=True)
 
 
 @settings(deadline=None, max_examples=100)

@@ -114,7 +114,7 @@ def _branch_layout(sel_frags, branch_frags, op):
     return out
 
 
-def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True,
+def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = False,
                  fuse: bool = True) -> tuple[list[tuple[int, int]], list[float], int]:
     """One tree -> (ops [(opcode, operand)], constants, max stack need).
 
@@ -123,7 +123,10 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = True,
     ``fold``: a subtree that reads no state (constants only) becomes one
     constant, computed by the generated kernel itself (:func:`_fold`), so the
     tree's value is bitwise the one the unfolded ops give.  The stack cap is
-    checked on the unfolded need: folding never admits a tree.  ``fuse``: a
+    checked on the unfolded need: folding never admits a tree.  Off by
+    default: evolved lamp trees hold few constant subtrees (0.5 % of their
+    ops, ``benchmarks/gp_op_stats.py``) and no rollout got measurably faster
+    (``benchmarks/gp_fold_fuse.py``).  ``fuse``: a
     primitive whose last argument is a sense reads it itself (operand
     OP_ARG_SENSE0 + sense), one op for the pair.
     """
@@ -222,7 +225,7 @@ def _kernel(info: PsetInfo):
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
                  law: TargetLaw | None = None, task_programs: Sequence = (),
-                 fold: bool = True, fuse: bool = True):
+                 fold: bool = False, fuse: bool = True):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
@@ -270,7 +273,7 @@ _COMPILED: dict = {}
 _COMPILED_MAX = 100_000
 
 
-def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = True, fuse: bool = True):
+def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = False, fuse: bool = True):
     if isinstance(t, gp.PrimitiveTree):
         return compile_tree(t, info, lazy, fold, fuse)
     key = (info.hash, info.sense_indices, lazy, fold, fuse, repr(list(t)))
@@ -285,7 +288,7 @@ def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = True, fuse: bool = Tru
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
                  lazy: bool = True, subgoals=(), law: TargetLaw | None = None,
-                 task_programs=(), fold: bool = True, fuse: bool = True) -> ControllerBatch:
+                 task_programs=(), fold: bool = False, fuse: bool = True) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
     ``module`` defaults to the generated interpreter for ``info``; ``lazy``
