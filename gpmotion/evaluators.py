@@ -158,6 +158,8 @@ def _check_workers(workers, minimum=1):
 
 # ---- worker side -----------------------------------------------------------------
 
+COMPILE_TOPIC = "gpmotion-cold-compile"      # Dask event: a worker compiles a kernel cold
+
 _CHUNK_LOCK = threading.Lock()
 
 
@@ -204,12 +206,17 @@ def _die_with_parent(parent_pid: int, kernel_signal: bool) -> None:
     threading.Thread(target=watch, name="gpmotion-parent-watch", daemon=True).start()
 
 
-def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool = True):
+def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool = True,
+                 notes=None):
     """Process-pool initializer: die with the parent, ignore Ctrl-C, threads,
-    imports, evaluator built (no simulation)."""
+    imports, evaluator built (no simulation); a cold compile is told to the
+    parent on ``notes`` (a queue), which says so while it waits."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # the main process checkpoints and stops us
     if parent_pid is not None:
         _die_with_parent(parent_pid, kernel_signal)
+    if notes is not None:
+        from .cache import forward_cold_compiles
+        forward_cold_compiles(lambda path: notes.put(str(path)))
     _limit_threads()
     from .inprocess import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
@@ -223,9 +230,14 @@ def _run_chunk(spec: dict, genomes_json: list, progress: float, generation: int 
         return result, time.perf_counter() - t0
 
 
-def _warm_worker(spec: dict) -> int:
-    """Dask: limit threads, build the evaluator and compile/load the kernels once."""
+def _warm_worker(spec: dict, dask_worker=None) -> int:
+    """Dask: limit threads, build the evaluator and compile/load the kernels once;
+    a cold compile is told to the client as a ``COMPILE_TOPIC`` event
+    (``dask_worker``: the worker, as ``Client.run`` passes it)."""
     _limit_threads()
+    if dask_worker is not None:
+        from .cache import forward_cold_compiles
+        forward_cold_compiles(lambda path: dask_worker.log_event(COMPILE_TOPIC, str(path)))
     from .inprocess import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
     return os.getpid()
@@ -333,9 +345,14 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
     def _spawn_pool(self):
         import multiprocessing
         main = threading.current_thread() is threading.main_thread()
-        return ProcessPoolExecutor(max_workers=self.workers,
-                                   mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_init_worker, initargs=(self.spec, os.getpid(), main))
+        ctx = multiprocessing.get_context("spawn")
+        if getattr(self, "_notes", None) is None:        # workers' cold compiles, relayed
+            self._notes = ctx.Queue()
+            threading.Thread(target=_relay_notes, args=(self._notes,), daemon=True,
+                             name="gpmotion-compile-notes").start()
+        return ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+                                   initializer=_init_worker,
+                                   initargs=(self.spec, os.getpid(), main, self._notes))
         # Processes start on demand, one per waiting chunk: never more than a batch's chunks.
 
     def worker_pids(self) -> list[int]:
@@ -397,12 +414,28 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
 
     def close(self):
         self._discard_pool()
+        notes, self._notes = getattr(self, "_notes", None), None
+        if notes is not None:
+            notes.put(None)                              # ends the relay thread
 
     def __del__(self):
         try:
             self._discard_pool()
         except Exception:
             pass
+
+
+def _relay_notes(notes) -> None:
+    """The parent's side of the workers' cold-compile notes (None ends it)."""
+    from .cache import tell_cold_compile
+    while True:
+        try:
+            path = notes.get()
+        except (EOFError, OSError, ValueError):
+            return
+        if path is None:
+            return
+        tell_cold_compile(path)
 
 
 # ---- Dask --------------------------------------------------------------------------
@@ -528,6 +561,8 @@ class DaskEvaluator(_ChunkedEvaluator):
             else:
                 self._client = self._connect(scheduler, timeout)
             self._client._timeout = self.reconnect_grace     # how long the client itself retries
+            from .cache import tell_cold_compile
+            self._client.subscribe_topic(COMPILE_TOPIC, lambda event: tell_cold_compile(event[1]))
             self._client.run(_warm_worker, self.spec)
             self.workers = max(1, len(self._client.scheduler_info().get("workers", {})) or workers)
         except Exception:

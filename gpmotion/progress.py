@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
 from collections import deque
 
@@ -47,6 +48,7 @@ class Progress:
         self._shown = -math.inf
         self._first = None            # (time, generation) after the first generation: no compile
         self._recent = deque([(self.t0, 0)])     # (time, evaluations so far)
+        self._generations_seen = False
 
     def eta(self, gen: int, now: float) -> str:
         """From the pace since the first generation, once 3 more are done and 2 s passed."""
@@ -80,6 +82,9 @@ class Progress:
         now = time.perf_counter()
         if rate is None:
             rate = self.count(len(ev.costs), now)
+        if not self._generations_seen:
+            self._generations_seen = True
+            first_generation_done()
         if self.quiet:
             return
         eta = self.eta(gen, now)
@@ -109,14 +114,71 @@ def bests(row: dict | None, best: float, ev) -> str:
 
 
 class CompileNote:
-    """Prints, once per kernel, that a kernel is compiling for the first time on this
-    machine (numba has no cache index for it yet): the first generation then takes
-    minutes, not seconds.  A listener of :func:`gpmotion.cache.on_cold_compile`."""
+    """Says, before the first generation, that kernels are compiling for the first
+    time on this machine (numba has no cache index for them yet, here or in a
+    worker process), so the wait is minutes, not seconds; a listener of
+    :func:`gpmotion.cache.on_cold_compile`.
 
-    def __init__(self, what: str):
-        self.what = what
+    The estimate is a measurement, not a guess: how long the first generation of
+    this kind of run (``kind``: figure and family) took, compiling included, the
+    last time it compiled cold on a CPU of this model (after an upgrade or a
+    cleared cache); never measured, the note says so and, on a terminal, counts
+    the seconds while it waits.  The first generation's end (:meth:`finish`)
+    prints how long it took and records it for the next time."""
+
+    TICK_S = 5.0
+
+    def __init__(self, what: str, kind: str | None = None):
+        self.what, self.kind = what, kind or what
+        self.t0 = None
+        self._stop = None
+        self._ticker = None
 
     def __call__(self, path) -> None:
-        from .cache import machine_dir
-        print(f"compiling the {self.what} kernels (about 1-4 min the first time on this "
-              f"machine; cached after, in {machine_dir()})", file=sys.stderr, flush=True)
+        with _NOTE_LOCK:                  # workers' notes arrive on other threads
+            if self.t0 is not None:
+                return                    # one note for the run's wait
+            self.t0 = time.perf_counter()
+        from .cache import compile_seconds, machine_dir
+        last = compile_seconds(self.kind)
+        took = (f"its first generation took {last:,.0f} s here last time, compiling included"
+                if last else "minutes, the first time on this machine")
+        print(f"compiling the {self.what} kernels ({took}; cached after, in {machine_dir()})",
+              file=sys.stderr, flush=True)
+        if sys.stderr.isatty():
+            self._stop = threading.Event()
+            self._ticker = threading.Thread(target=self._tick, name="gpmotion-compile-note",
+                                            daemon=True)
+            self._ticker.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(self.TICK_S):
+            print(f"\r  compiling… {time.perf_counter() - self.t0:,.0f} s\033[K", end="",
+                  file=sys.stderr, flush=True)
+
+    def finish(self, measured: bool = False) -> None:
+        """Stop counting; ``measured`` (the first generation is done): say how long
+        the wait was and record it for :func:`gpmotion.cache.compile_seconds`."""
+        if self._ticker is not None:
+            self._stop.set()
+            self._ticker.join()
+            self._ticker = None
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
+        if measured and self.t0 is not None and not getattr(self, "_done", False):
+            self._done = True
+            seconds = time.perf_counter() - self.t0
+            from .cache import record_compile_seconds
+            record_compile_seconds(self.kind, seconds)
+            print(f"compiled the {self.what} kernels: the first generation took {seconds:,.0f} s;"
+                  " cached now", file=sys.stderr, flush=True)
+
+
+_NOTE_LOCK = threading.Lock()
+
+
+def first_generation_done() -> None:
+    """The first generation came back: its kernels are compiled (notes say so)."""
+    from .cache import cold_listeners
+    for listener in cold_listeners():
+        if isinstance(listener, CompileNote):
+            listener.finish(measured=True)

@@ -11,6 +11,7 @@ a config and a log from different runs are never mixed.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
 import signal
@@ -190,6 +191,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
     every = _checkpoint_every(checkpoint_every)
     backend = dict(backend or {})
     given, evaluator, rd = cfg, None, None
+    notes = contextlib.ExitStack()        # the cold-compile note, also while workers warm up
     if not resume and extend_generations is not None:
         raise ConfigError("--extend-generations continues an existing run: use resume")
     try:
@@ -212,6 +214,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
                 validate_number("--extend-generations", extend_generations, lo=1,
                                 hi=10_000_000, integer=True)
             rec = _restore(rd, doc, search)          # everything checked, nothing changed
+            notes.enter_context(_compile_note(task, family, quiet))
             evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd.trim_log(rec.trim)                    # now the changes
             if extend_generations is not None:
@@ -220,6 +223,7 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
         else:       # validate everything (the scheduler too) before touching the disk
             task, family, search, actuation = build(cfg)
             cfg.task = task.id                                # records store the versioned id
+            notes.enter_context(_compile_note(task, family, quiet))
             evaluator = _evaluator(cfg, task, family, actuation, backend)
             rd = RunDir.create(out, force=force)
             from .plugins import for_record
@@ -233,11 +237,11 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
             print(banner(cfg, task, family, search, actuation, rd, verb), file=sys.stderr)
         if evaluator is None:
             evaluator = _evaluator(cfg, task, family, actuation, backend)
-        with _compile_note(task, quiet):
-            _loop(evaluator, search, rec, quiet, max_generations)
+        _loop(evaluator, search, rec, quiet, max_generations)
         if search.done:
             _finish(rd, cfg, task, family, actuation, search, artifacts)
     finally:
+        notes.close()
         try:
             if evaluator is not None:
                 evaluator.close()
@@ -247,13 +251,13 @@ def run(cfg: RunConfig | None, out: str | Path | None = None, *, force: bool = F
     return RunResult((search.best, search.best_cost, rd))
 
 
-def _compile_note(task, quiet: bool):
-    """A note on stderr before a kernel compiles cold (minutes, once per machine)."""
-    import contextlib
+def _compile_note(task, family, quiet: bool):
+    """A note on stderr before kernels compile cold, here or in the workers
+    (minutes, once per machine); timed per figure and family."""
     from .cache import on_cold_compile
     if quiet:
         return contextlib.nullcontext()
-    return on_cold_compile(CompileNote(task.figure.name))
+    return on_cold_compile(CompileNote(task.figure.name, f"{task.figure.name} {family.name}"))
 
 
 def _keep_legacy_noisy(rd: RunDir, cfg) -> None:

@@ -52,14 +52,24 @@ def test_generations_are_numbered_as_the_log_numbers_them(family, budget, tmp_pa
     assert all(k <= n for _, _, k, n in gens)
 
 
+@pytest.fixture(autouse=True)
+def own_timings(tmp_path, monkeypatch):
+    """Compile times these tests measure go to a file of their own, never the user's."""
+    path = tmp_path / "compile-seconds.json"
+    monkeypatch.setattr(cache, "timings_path", lambda: path)
+    return path
+
+
 def test_a_cold_kernel_is_announced_before_it_compiles(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(cache, "numba_indexed", lambda path: False)    # as on a fresh machine
     monkeypatch.setattr("gpmotion.sim.kernels._KERNELS", {})
     assert main(["run", "lamp_hop", "--out", str(tmp_path / "r"), "--param", "seconds=0.2",
                  "--population", "4", "--generations", "1", "--no-artifacts"]) == 0
     err = capsys.readouterr().err
-    assert "compiling the lamp kernels" in err
+    assert "compiling the lamp kernels (minutes, the first time on this machine" in err
     assert err.index("compiling the lamp kernels") < err.index("gen ")
+    assert err.index("compiling the lamp kernels") < err.index("compiled the lamp kernels: "
+                                                                "the first generation took")
 
 
 def test_a_warm_kernel_is_not_announced(tmp_path, capsys):
@@ -169,3 +179,53 @@ def test_a_log_begun_by_an_older_gpmotion_keeps_its_column_and_its_meaning(tmp_p
     for r in rows[-2:]:
         average = int(r["evaluations"]) / float(r["elapsed_s"])
         assert float(r["evals_per_s"]) == pytest.approx(average, rel=0.01, abs=0.1)
+
+
+def test_the_estimate_is_the_first_generation_measured_here_last_time(own_timings, capsys):
+    """No number until one was measured on this CPU model; then that number, for
+    that figure and family only."""
+    from gpmotion.progress import CompileNote, first_generation_done
+    with cache.on_cold_compile(CompileNote("lamp", "lamp gp")) as note:
+        note("rollout_a.py")
+        note("rollout_b.py")                          # one note for the run's wait
+        note.t0 -= 95.0                               # as if the generation took 95 s
+        first_generation_done()
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and "minutes, the first time on this machine" in err[0]
+    assert "the first generation took 95 s" in err[1]
+    assert cache.compile_seconds("lamp gp") == pytest.approx(95.0, abs=0.2)
+    assert cache.compile_seconds("lamp bsr-sense") is None
+    with cache.on_cold_compile(CompileNote("lamp", "lamp gp")) as note:
+        note("rollout_c.py")
+    assert "its first generation took 95 s here last time, compiling included" in \
+        capsys.readouterr().err
+    own_timings.write_text("[not a table")            # a damaged cache file: no estimate
+    assert cache.compile_seconds("lamp gp") is None
+
+
+def _cold_in_workers(tmp_path, monkeypatch):
+    """Worker processes start as on a fresh machine: their numba index looks empty
+    (a sitecustomize on their PYTHONPATH; this process is untouched)."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text(
+        "import gpmotion.cache\ngpmotion.cache.numba_indexed = lambda path: False\n")
+    import os
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
+        [str(site)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+
+
+@pytest.mark.parametrize("backend", [["--workers", "2"], ["--scheduler", "local",
+                                                          "--workers", "1"]],
+                         ids=["process-pool", "dask"])
+def test_a_cold_compile_in_the_workers_is_announced_by_the_run(tmp_path, capsys, monkeypatch,
+                                                               backend):
+    if backend[1] == "local":
+        pytest.importorskip("distributed")
+    _cold_in_workers(tmp_path, monkeypatch)
+    assert main(["run", "lamp_hop", "--out", str(tmp_path / "r"), "--param", "seconds=0.2",
+                 "--population", "4", "--generations", "1", "--no-artifacts", *backend]) == 0
+    err = capsys.readouterr().err
+    assert err.count("compiling the lamp kernels") == 1           # once, however many workers
+    assert err.index("compiling the lamp kernels") < err.index("gen ")
+    assert "compiled the lamp kernels: the first generation took" in err
