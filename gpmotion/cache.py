@@ -24,7 +24,6 @@ import contextlib
 import functools
 import hashlib
 import importlib.util
-import json
 import os
 import sys
 from pathlib import Path
@@ -119,41 +118,18 @@ _OURS = "GPMOTION_NUMBA_CACHE_DIR"
 
 
 _COLD: list = []          # listeners told before a kernel compiles for the first time
-_FORWARD: list = []       # in a worker process: the one channel to its parent (or none)
 
 
 @contextlib.contextmanager
 def on_cold_compile(listener):
     """While in the block, ``listener(path)`` is called before the generated kernel
     module at ``path`` is first imported when numba's cache holds no index for it:
-    its compilation is about to take minutes (a run says so).  Compiles in worker
-    processes are told too, through their evaluator (:func:`forward_cold_compiles`).
-    On leaving, ``listener.finish()`` is called when it has one."""
+    its compilation is about to take minutes (a run says so)."""
     _COLD.append(listener)
     try:
         yield listener
     finally:
         _COLD.remove(listener)
-        finish = getattr(listener, "finish", None)
-        if finish is not None:
-            finish()
-
-
-def forward_cold_compiles(send) -> None:
-    """In a worker process: ``send(path)`` for each cold compile, so the process
-    that waits for the worker can say so (replaces an earlier channel)."""
-    _FORWARD[:] = [send]
-
-
-def cold_listeners() -> list:
-    """The listeners :func:`on_cold_compile` holds now."""
-    return list(_COLD)
-
-
-def tell_cold_compile(path) -> None:
-    """A worker's cold compile of ``path`` reached this process: tell the listeners."""
-    for listener in list(_COLD):
-        listener(path)
 
 
 def numba_indexed(path: str | Path) -> bool:
@@ -165,56 +141,9 @@ def numba_indexed(path: str | Path) -> bool:
 
 def announce_compile(path: str | Path) -> None:
     """Tell the listeners (:func:`on_cold_compile`) when ``path`` compiles cold."""
-    if (_COLD or _FORWARD) and not numba_indexed(path):
-        for listener in list(_COLD) + list(_FORWARD):
-            try:
-                listener(path)
-            except Exception:          # a note must never stop a compile (a closed channel)
-                pass
-
-
-COMPILE_SECONDS = "compile-seconds.json"     # in cache_root(): kept across versions
-
-
-def timings_path() -> Path:
-    return cache_root() / COMPILE_SECONDS
-
-
-def _timing_key(kind: str) -> str:
-    return f"{_compile_target()[0].strip()} | {kind}"
-
-
-def _read_timings() -> dict:
-    """{CPU | kind: seconds}; an unreadable or foreign file counts as empty (a cache)."""
-    try:
-        data = json.loads(timings_path().read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    if not isinstance(data, dict):
-        return {}
-    return {k: float(v) for k, v in data.items() if isinstance(k, str) and isinstance(v, (int, float))
-            and not isinstance(v, bool) and 0 < v < 1e6}
-
-
-def compile_seconds(kind: str) -> float | None:
-    """How long the first generation of ``kind`` took, compiling included, the last
-    time its kernels compiled cold on a CPU of this model (None: never measured)."""
-    return _read_timings().get(_timing_key(kind))
-
-
-def record_compile_seconds(kind: str, seconds: float) -> None:
-    """Remember ``seconds`` for :func:`compile_seconds` (atomically; a cache that
-    cannot be written is no error)."""
-    data = _read_timings()
-    data[_timing_key(kind)] = round(float(seconds), 1)
-    path = timings_path()
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError:
-        pass
+    if _COLD and not numba_indexed(path):
+        for listener in list(_COLD):
+            listener(path)
 
 
 def cache_dir() -> Path:

@@ -215,7 +215,7 @@ def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool 
     if parent_pid is not None:
         _die_with_parent(parent_pid, kernel_signal)
     if notes is not None:
-        from .cache import forward_cold_compiles
+        from .compile_events import forward_cold_compiles
         forward_cold_compiles(lambda path: notes.put(str(path)))
     _limit_threads()
     from .inprocess import evaluator_from_spec
@@ -236,7 +236,7 @@ def _warm_worker(spec: dict, dask_worker=None) -> int:
     (``dask_worker``: the worker, as ``Client.run`` passes it)."""
     _limit_threads()
     if dask_worker is not None:
-        from .cache import forward_cold_compiles
+        from .compile_events import forward_cold_compiles
         forward_cold_compiles(lambda path: dask_worker.log_event(COMPILE_TOPIC, str(path)))
     from .inprocess import evaluator_from_spec
     evaluator_from_spec(spec, threads=1)
@@ -427,7 +427,7 @@ class ProcessPoolEvaluator(_ChunkedEvaluator):
 
 def _relay_notes(notes) -> None:
     """The parent's side of the workers' cold-compile notes (None ends it)."""
-    from .cache import tell_cold_compile
+    from .compile_events import tell_cold_compile
     while True:
         try:
             path = notes.get()
@@ -561,7 +561,7 @@ class DaskEvaluator(_ChunkedEvaluator):
             else:
                 self._client = self._connect(scheduler, timeout)
             self._client._timeout = self.reconnect_grace     # how long the client itself retries
-            from .cache import tell_cold_compile
+            from .compile_events import tell_cold_compile
             self._client.subscribe_topic(COMPILE_TOPIC, lambda event: tell_cold_compile(event[1]))
             self._client.run(_warm_worker, self.spec)
             self.workers = max(1, len(self._client.scheduler_info().get("workers", {})) or workers)

@@ -122,15 +122,18 @@ class CompileNote:
     The estimate is a measurement, not a guess: how long the first generation of
     this kind of run (``kind``: figure and family) took, compiling included, the
     last time it compiled cold on a CPU of this model (after an upgrade or a
-    cleared cache); never measured, the note says so and, on a terminal, counts
-    the seconds while it waits.  The first generation's end (:meth:`finish`)
-    prints how long it took and records it for the next time."""
+    cleared cache); never measured, the note says so and, for a run on a
+    terminal, counts the seconds while it waits (until the first generation's
+    end, :meth:`finish`, or the note stops listening).  That end prints how long
+    it took and records it for the next time.  ``kind`` None (``check``): no
+    count, nothing recorded."""
 
     TICK_S = 5.0
 
     def __init__(self, what: str, kind: str | None = None):
-        self.what, self.kind = what, kind or what
+        self.what, self.kind = what, kind
         self.t0 = None
+        self._done = False
         self._stop = None
         self._ticker = None
 
@@ -139,35 +142,37 @@ class CompileNote:
             if self.t0 is not None:
                 return                    # one note for the run's wait
             self.t0 = time.perf_counter()
-        from .cache import compile_seconds, machine_dir
-        last = compile_seconds(self.kind)
+        from .cache import machine_dir
+        from .compile_events import compile_seconds
+        last = compile_seconds(self.kind) if self.kind else None
         took = (f"its first generation took {last:,.0f} s here last time, compiling included"
                 if last else "minutes, the first time on this machine")
         print(f"compiling the {self.what} kernels ({took}; cached after, in {machine_dir()})",
               file=sys.stderr, flush=True)
-        if sys.stderr.isatty():
+        if self.kind and sys.stderr.isatty():
             self._stop = threading.Event()
             self._ticker = threading.Thread(target=self._tick, name="gpmotion-compile-note",
                                             daemon=True)
             self._ticker.start()
 
     def _tick(self) -> None:
-        while not self._stop.wait(self.TICK_S):
+        from .compile_events import cold_listeners
+        while not self._stop.wait(self.TICK_S) and self in cold_listeners():
             print(f"\r  compiling… {time.perf_counter() - self.t0:,.0f} s\033[K", end="",
                   file=sys.stderr, flush=True)
 
     def finish(self, measured: bool = False) -> None:
         """Stop counting; ``measured`` (the first generation is done): say how long
-        the wait was and record it for :func:`gpmotion.cache.compile_seconds`."""
+        the wait was and record it for :func:`gpmotion.compile_events.compile_seconds`."""
         if self._ticker is not None:
             self._stop.set()
             self._ticker.join()
             self._ticker = None
             print("\r\033[K", end="", file=sys.stderr, flush=True)
-        if measured and self.t0 is not None and not getattr(self, "_done", False):
+        if measured and self.kind and self.t0 is not None and not self._done:
             self._done = True
             seconds = time.perf_counter() - self.t0
-            from .cache import record_compile_seconds
+            from .compile_events import record_compile_seconds
             record_compile_seconds(self.kind, seconds)
             print(f"compiled the {self.what} kernels: the first generation took {seconds:,.0f} s;"
                   " cached now", file=sys.stderr, flush=True)
@@ -178,7 +183,7 @@ _NOTE_LOCK = threading.Lock()
 
 def first_generation_done() -> None:
     """The first generation came back: its kernels are compiled (notes say so)."""
-    from .cache import cold_listeners
+    from .compile_events import cold_listeners
     for listener in cold_listeners():
         if isinstance(listener, CompileNote):
             listener.finish(measured=True)

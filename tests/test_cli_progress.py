@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from gpmotion import cache
+from gpmotion import cache, compile_events
 from gpmotion.cli import main
 from gpmotion.evaluation import Evaluation
 from gpmotion.progress import Progress
@@ -56,7 +56,7 @@ def test_generations_are_numbered_as_the_log_numbers_them(family, budget, tmp_pa
 def own_timings(tmp_path, monkeypatch):
     """Compile times these tests measure go to a file of their own, never the user's."""
     path = tmp_path / "compile-seconds.json"
-    monkeypatch.setattr(cache, "timings_path", lambda: path)
+    monkeypatch.setattr(compile_events, "timings_path", lambda: path)
     return path
 
 
@@ -193,14 +193,14 @@ def test_the_estimate_is_the_first_generation_measured_here_last_time(own_timing
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 2 and "minutes, the first time on this machine" in err[0]
     assert "the first generation took 95 s" in err[1]
-    assert cache.compile_seconds("lamp gp") == pytest.approx(95.0, abs=0.2)
-    assert cache.compile_seconds("lamp bsr-sense") is None
+    assert compile_events.compile_seconds("lamp gp") == pytest.approx(95.0, abs=0.2)
+    assert compile_events.compile_seconds("lamp bsr-sense") is None
     with cache.on_cold_compile(CompileNote("lamp", "lamp gp")) as note:
         note("rollout_c.py")
     assert "its first generation took 95 s here last time, compiling included" in \
         capsys.readouterr().err
     own_timings.write_text("[not a table")            # a damaged cache file: no estimate
-    assert cache.compile_seconds("lamp gp") is None
+    assert compile_events.compile_seconds("lamp gp") is None
 
 
 def _cold_in_workers(tmp_path, monkeypatch):
