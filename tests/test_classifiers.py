@@ -45,10 +45,11 @@ def judged() -> list[dict]:
     return out
 
 
-def confusion(rows, key: str, labels) -> str:
-    """Markdown confusion matrix: rows the eye's label, columns the classifier's."""
+def confusion(rows, key: str, labels, name: str | None = None) -> str:
+    """Markdown confusion matrix: rows the eye's label, columns the classifier's
+    (``r[key]``, headed ``name``, default ``key``)."""
     count = Counter((r["eye"], r[key]) for r in rows)
-    head = "| eye \\ " + key + " | " + " | ".join(labels) + " | agree |"
+    head = "| eye \\ " + (name or key) + " | " + " | ".join(labels) + " | agree |"
     lines = [head, "|" + "---|" * (len(labels) + 2)]
     for eye in labels:
         n = sum(count[(eye, c)] for c in labels)

@@ -21,6 +21,9 @@ from collections import Counter
 from functools import lru_cache
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from test_classifiers import confusion as _confusion  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data" / "labelled_motions_3d.json"
 DOCS = ROOT / "docs" / "reproduction" / "classifiers.md"
@@ -66,16 +69,7 @@ def judged() -> list[dict]:
 
 
 def confusion(rows, labels) -> str:
-    """Markdown confusion matrix: rows the eye's label, columns the classifier's."""
-    count = Counter((r["eye"], r["got"]) for r in rows)
-    lines = ["| eye \\ gaits3d | " + " | ".join(labels) + " | agree |",
-             "|" + "---|" * (len(labels) + 2)]
-    for eye in labels:
-        n = sum(count[(eye, c)] for c in labels)
-        if n:
-            lines.append(f"| {eye} | " + " | ".join(str(count[(eye, c)]) for c in labels)
-                         + f" | {count[(eye, eye)]} / {n} |")
-    return "\n".join(lines)
+    return _confusion(rows, "got", labels, name="gaits3d")
 
 
 def agree(rows) -> int:
