@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import sys
-from collections import Counter
 from functools import lru_cache
 from pathlib import Path
 
