@@ -145,7 +145,7 @@ def bench_gp_trees(seed: int = GP_TREE_SEED, nodes: tuple[int, int] | None = Non
 
 def _count_ops(ci, cf, tree_index, senses, prims) -> int:
     """Bytecode ops run_tree executes on one sense vector (plain Python walk)."""
-    from .gp.bytecode import HEADER, OP_JUMP, OP_PRIM0, OP_PUSH_SENSE
+    from .gp.bytecode import HEADER, OP_ARG_SENSE0, OP_JUMP, OP_PRIM0, OP_PUSH_SENSE
     from .gp.primitives import branch_index, clamp
     h = HEADER + 3 * tree_index
     pos, end = int(ci[h + 1]), int(ci[h + 1]) + 2 * int(ci[h + 2])
@@ -161,6 +161,9 @@ def _count_ops(ci, cf, tree_index, senses, prims) -> int:
             stack.append(0.0)
         else:
             p = prims[op - OP_PRIM0]
+            if arg >= OP_ARG_SENSE0:            # fused: push sense arg - OP_ARG_SENSE0, apply
+                stack.append(clamp(senses[arg - OP_ARG_SENSE0]))
+                arg = 0
             k = p.arity if arg == 0 else len(p.select)
             args = stack[len(stack) - k:]
             del stack[len(stack) - k:]

@@ -136,3 +136,20 @@ def test_compare_mujoco_gp_smoke():
     assert g["trees_agree_max_abs_diff"] < 1e-9        # same trees, same values in both
     assert g["senses_initial_max_abs_diff"] < 1e-9     # the loop's senses are ours
     assert g["mujoco_finite"]
+
+
+def test_the_op_count_walks_fused_bytecode_as_the_kernel_runs_it():
+    """Eager bytecode runs every op once, fused ops included: the Python walk
+    that counts ops per evaluation must count each tree's whole length."""
+    import numpy as np
+
+    from gpmotion.gp.bytecode import HEADER, OP_ARG_SENSE0, OP_PRIM0, encode_batch
+    task, fam, trees = bench.bench_gp_trees()
+    b = encode_batch([trees], fam.info, fam.actuators, lazy=False)
+    ci, cf = b.ci[0], b.cf[0]
+    assert any(ci[p] >= OP_PRIM0 and ci[p + 1] >= OP_ARG_SENSE0
+               for p in range(HEADER + 3 * len(trees), len(ci) - 1, 2)), "no fused op to count"
+    senses = np.random.default_rng(0).uniform(-1, 1, 64)
+    for k in range(len(trees)):
+        n_ops = int(ci[HEADER + 3 * k + 2])
+        assert bench._count_ops(ci, cf, k, senses, fam.info.primitives) == n_ops
