@@ -12,7 +12,8 @@ search (``gpmotion study table DIR --judge NAME``):
 
 Judges measuring the same things share kept measures: every single-search
 row keeps the task's measures *and* the gait features where the figure is a
-planar traveller, so ``task`` and ``gait`` re-judge each other's ledgers.
+planar traveller (a 3-D creature: its :mod:`gpmotion.gaits3d` measures), so
+``task`` and ``gait`` (``gait3d``) re-judge each other's ledgers.
 """
 from __future__ import annotations
 
@@ -69,7 +70,8 @@ def rejudge(row: dict, name: str, expect: list) -> tuple:
 
 def single_measures(task, traj, measures: dict, ok) -> dict:
     """What a single search's row keeps: the task's measures of the best
-    controller, its success test, and the gait features of a planar traveller."""
+    controller, its success test, and the gait features of a planar traveller
+    or of a 3-D creature (a task naming its ``feet``)."""
     kept = {"task_success": bool(ok[0])}
     for k, v in measures.items():
         x = float(np.asarray(v).reshape(-1)[0])
@@ -79,6 +81,10 @@ def single_measures(task, traj, measures: dict, ok) -> dict:
         from .. import gaits
         _, m = gaits.judge(traj)            # the strict measures hold the loose features too
         kept.update({f"gait_{k}": v for k, v in m.items()})
+    elif fig.dimensions == 3 and getattr(task, "feet", ()):
+        from .. import gaits3d
+        _, m = gaits3d.judge(traj, task)
+        kept.update({f"gait3d_{k}": v for k, v in m.items()})
     return kept
 
 
@@ -131,6 +137,45 @@ register_judge(Judge(
     "the weight, landings on the feet: gpmotion.gaits); success: an expected gait",
     ("cartwheel", "tumble", "hop", "periodic shuffle", "shuffle", "other"),
     _strict_gait_decide, needs=_STRICT_GAIT_KEYS))
+
+
+_GAIT3D_KEYS = tuple(f"gait3d_{k}" for k in (
+    "forward", "turn_deg", "facing_deg", "fell", "flights", "landed_on_feet", "steps", "paired",
+    "pair_support"))
+
+
+def _gait3d_label(kept: dict) -> str:
+    from ..gaits3d import relabel
+    return relabel({k[7:]: v for k, v in kept.items() if k.startswith("gait3d_")})
+
+
+def _gait3d_decide(kept: dict, expect: list):
+    label = _gait3d_label(kept)
+    return (label in expect) if expect else None, label
+
+
+register_judge(Judge(
+    "gait3d", "the 3-D creature classifier (gpmotion.gaits3d: fallen, bound, walk, turn); "
+    "success: an expected label", ("fallen", "bound", "walk", "turn", "other"),
+    _gait3d_decide, needs=_GAIT3D_KEYS))
+
+# Auslander et al. §4.3: Bob's time-based walks fail "after two or three steps"
+LONG_WALK_STEPS = 5
+LONG_WALK = f"walk of ≥ {LONG_WALK_STEPS} steps"
+
+
+def _long_walk_decide(kept: dict, expect: list):
+    label = _gait3d_label(kept)
+    if label == "walk" and (kept["gait3d_steps"] or 0) >= LONG_WALK_STEPS:
+        label = LONG_WALK
+    return (label in expect) if expect else None, label
+
+
+register_judge(Judge(
+    "long-walk", f"a 3-D biped's walk (gpmotion.gaits3d) of ≥ {LONG_WALK_STEPS} forward-facing "
+    "steps, the feet taking turns; success: an expected label",
+    (LONG_WALK, "walk", "fallen", "bound", "turn", "other"), _long_walk_decide,
+    needs=_GAIT3D_KEYS))
 
 
 # Rex's walk → turn → walk: every stage judged on its own frames of the composite
