@@ -14,11 +14,12 @@ external forces, prescribed dofs, armatures) are taken from the states the
 and both forms compute q̈ and the joint forces from them in turn,
 ``--repeats`` times.
 
-Measured (docs/speed.md): slower, 0.5-0.7× the one-episode pass for 2-32
-lanes.  numba/LLVM do not vectorise these lane loops (scalar ``vdivsd`` in
-the machine code, no ``vdivpd``), though a lane loop over one or two arrays
-does vectorise: with a dozen array arguments the compiler cannot rule out
-aliasing.  A vectorised layout needs more than the lanes added.  :func:`aba_soa` is ``planar.aba`` with the lanes added
+Measured (docs/speed.md): no faster; from 0.6× to 1.1× the one-episode pass
+(best runs, 8 and 32 lanes, from one run to the next).  numba/LLVM do not
+vectorise these lane loops (a scalar ``vdivsd`` in the machine code, no
+``vdivpd``), though a short lane loop over a few arrays does vectorise: the
+lanes alone buy nothing, a vectorised pass needs a layout the compiler can
+prove free of aliasing.  :func:`aba_soa` is ``planar.aba`` with the lanes added
 and its data-dependent branches (a prescribed dof or not) written as selects
 of values both ways compute; the outputs must agree bit for bit.
 """
