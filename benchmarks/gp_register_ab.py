@@ -24,10 +24,12 @@ random individuals of the task (ramped half-and-half, depth 2..6).
 ``--cheap-trig`` times both forms with ``sin`` and ``cos`` replaced by a
 multiplication: what the interpretation itself costs.
 
-Measured (docs/speed.md): the register form is no faster, with or without
-the trigonometry: dispatching a fused or plain push costs about what reading
-an operand's register index does, and the bench trees' 16 ``sin``/``cos``
-calls a step take about half of the controller's time.
+Measured (docs/speed.md): no faster on the lamp (×0.99-1.01 on the bench
+trees, ×0.73-0.89 on first-generation populations, ×0.93 without the
+trigonometry), ×1.06-1.12 on herman's six arm trees: dispatching a fused or
+plain push costs about what reading an operand's register index does, and
+the lamp bench trees' 16 ``sin``/``cos`` calls a step take about half of the
+controller's time.
 """
 from __future__ import annotations
 

@@ -19,6 +19,11 @@ median per stage and the spread (min-max) across the repeats are printed in
 ns per step, beside the rollout's own time per step (which adds the
 recording of frames and the loop's bookkeeping).
 
+On a loaded machine a timed run longer than the scheduler's time slice is
+cut by preemptions (the same code then seems to run at two speeds, about
+2x apart): keep the runs short (``--episodes 2``, or 1 for herman) so that
+some of them run whole, and read the bests.
+
 Workloads are those of ``benchmarks/compare_mujoco.py`` / ``gpmotion bench``:
 ``lamp`` (sines), ``lamp_gp`` (three random ~35-node trees, lamp_hop),
 ``herman`` (3-D, GP right arm, herman_touch_nose).
