@@ -5,9 +5,9 @@
 For each part seed S: a cartwheel (2 s, ``w_rotations`` 10), a jump (1 s,
 ``w_max_height`` 4) and a shuffle (1.5 s, ``w_contact_distance`` 1), each
 ``bsr-sense`` with R = 10 on ``starman_auslander``, 40,000 evaluations
-(``--working 10 --generations 3999``), in DIR/PART-sS.  ``--search`` runs the
-missing part searches (one at a time, through ``gpmotion run``); without it
-they must exist.
+(``--working 10 --generations 3999``; ``--generations 999`` for 10,000), in
+DIR/PART-sS.  ``--search`` runs the missing part searches (one at a time,
+through ``gpmotion run``); without it they must exist.
 
 Each part is replayed alone and judged: its strict gait label
 (``gpmotion.gaits.judge``) and the phase checks of ``benchmarks/composite.py``
@@ -49,9 +49,10 @@ UPRIGHT = Path(__file__).resolve().parent.parent / "examples/composite/starman_u
 SWITCHES, SECONDS = (2.0, 3.0), 4.5
 
 
-def part_command(part: str, seed: int, out: Path) -> list[str]:
+def part_command(part: str, seed: int, out: Path, generations: int = 3999) -> list[str]:
     cmd = [sys.executable, "-m", "gpmotion.cli", "run", "starman_travel", "--controller", "bsr-sense",
-           "--rules", "10", "--figure", "starman_auslander", "--working", "10", "--generations", "3999",
+           "--rules", "10", "--figure", "starman_auslander", "--working", "10",
+           "--generations", str(generations),
            "--seed", str(seed), "--out", str(out), "--quiet", "--no-artifacts"]
     for p in PARTS[part]:
         cmd += ["--param", p]
@@ -150,6 +151,8 @@ def main(argv=None):
     ap.add_argument("--runs", default="runs/sense-composite", help="folder of the part runs")
     ap.add_argument("--search-seeds", default="0-4", help="transition-search seeds")
     ap.add_argument("--search", action="store_true", help="run the missing part searches")
+    ap.add_argument("--generations", type=int, default=3999,
+                    help="rounds of each part search (10 evaluations a round; default 3999: 40,000)")
     ap.add_argument("--grid", action="store_true", help="score every switch pair too")
     a = ap.parse_args(argv)
     root = Path(a.runs)
@@ -162,8 +165,9 @@ def main(argv=None):
             if not (d / "best.json").exists():
                 if not a.search:
                     sys.exit(f"{d}/best.json missing (run with --search)")
-                print(" ".join(part_command(p, seed, d)), flush=True)
-                subprocess.run(part_command(p, seed, d), check=True)
+                cmd = part_command(p, seed, d, a.generations)
+                print(" ".join(cmd), flush=True)
+                subprocess.run(cmd, check=True)
         row = {"parts": {p: judge_part(d, p) for p, d in paths.items()}}
         comp = C.from_controllers([paths[p] for p in PARTS], switches=SWITCHES, seconds=SECONDS,
                                   names=list(PARTS))
