@@ -66,5 +66,6 @@ def test_the_strict_report_table_is_rejudged_from_the_kept_measures(name):
         mine = [r for r in report_rows(name) if r["config"] == conf]
         expect = spec.configurations[conf].expect
         assert t["runs"] == len(mine)
-        assert t["success"] == (sum(bool(rejudge(r, "gait-strict", expect)[0]) for r in mine)
-                                if mine else None)
+        verdicts = [rejudge(r, "gait-strict", expect)[0] for r in mine]
+        tested = [v for v in verdicts if v is not None]      # no expected gait: no test
+        assert t["success"] == (sum(map(bool, tested)) if tested else None)
