@@ -26,18 +26,32 @@ def _replayed(rel: str):
     return float(costs[0]), bool(ok[0]), rec
 
 
-def test_the_creatures_ledger_holds_imported_tune_rows_of_two_configurations():
-    assert {(r["config"], r["seed"]) for r in ROWS} == {
+def test_the_creatures_ledger_holds_imported_tune_rows_and_report_rows_it_ran():
+    tune = [r for r in ROWS if r["seeds"] == "tune"]
+    assert {(r["config"], r["seed"]) for r in tune} == {
         (c, s) for c in ("rex-bsr-time", "rex-sequence") for s in SPEC.tune_seeds}
-    assert all(r["seeds"] == "tune" and r["imported"] for r in ROWS)
+    assert all(r["imported"] for r in tune)
+    report = [r for r in ROWS if r["seeds"] == "report"]
+    assert report and all(r["seed"] in SPEC.report_seeds and "imported" not in r for r in report)
 
 
 @pytest.mark.parametrize("row", [r for r in ROWS if "stages" not in r],
-                         ids=lambda r: f"{r['config']}-{r['seed']}")
+                         ids=lambda r: f"{r['config']}-{r['seed']}-{r['start']}")
 def test_a_single_search_controller_replays_to_its_row(row):
-    cost, ok, rec = _replayed(row["controller"])
-    assert cost == row["cost"] == rec["final_cost"]
-    assert ok == row["success"] == row["measures"]["task_success"]
+    """The cost and the task's test bit for bit; a report row's kept measures
+    (its gaits3d measures among them) are the replay's, and its judge names
+    the recorded label from them."""
+    from gpmotion.study.judge import single_measures
+    task, family, actuation, genome, rec = load_controller(CREATURES / row["controller"])
+    traj, costs, measures, ok = replay_genome(task, family, actuation, genome)
+    assert float(costs[0]) == row["cost"] == rec["final_cost"]
+    assert bool(ok[0]) == row["measures"]["task_success"]
+    if row["seeds"] == "tune":           # imported: the judge was the task's test
+        assert bool(ok[0]) == row["success"]
+        return
+    assert single_measures(task, traj, measures, ok) == row["measures"]
+    conf = SPEC.configurations[row["config"]]
+    assert get_judge(conf.judge).decide(row["measures"], conf.expect) == (row["success"], row["label"])
 
 
 @pytest.mark.parametrize("row", [r for r in ROWS if "stages" in r], ids=lambda r: f"seed{r['seed']}")
