@@ -159,15 +159,18 @@ def test_the_study_judges_name_what_gaits3d_names_from_a_rows_kept_measures():
     from gpmotion.study.judge import LONG_WALK, LONG_WALK_STEPS, get_judge, rejudge, single_measures
     for r in judged()[:6] + [r for r in judged() if creature(r) == "Bob"][:3]:
         task, traj = replay(r)
-        ok = task.success(traj, task.measure(traj))
-        kept = json.loads(json.dumps(single_measures(task, traj, task.measure(traj), ok)))
+        m = task.measure(traj)
+        kept = json.loads(json.dumps(single_measures(task, traj, m, task.success(traj, m))))
         assert rejudge({"measures": kept}, "gait3d", ["bound"]) == (r["got"] == "bound", r["got"])
         walk5 = r["got"] == "walk" and (r["measures"]["steps"] or 0) >= LONG_WALK_STEPS
         assert rejudge({"measures": kept}, "long-walk", [LONG_WALK])[0] == walk5
     kept = {f"gait3d_{k}": v for k, v in {"forward": 2.0, "turn_deg": 5.0, "facing_deg": 5.0,
                                            "fell": False, "flights": 0, "landed_on_feet": 0,
                                            "steps": 4, "paired": None, "pair_support": None}.items()}
+    from gpmotion.gaits3d import LABELS
+    assert get_judge("gait3d").labels == LABELS
     j = get_judge("long-walk")
+    assert set(j.labels) == {LONG_WALK, *LABELS}
     assert j.decide(kept, [LONG_WALK]) == (False, "walk")
     assert j.decide({**kept, "gait3d_steps": 5}, [LONG_WALK]) == (True, LONG_WALK)
     assert j.decide({**kept, "gait3d_fell": True, "gait3d_steps": 7}, [LONG_WALK]) == (False, "fallen")

@@ -139,6 +139,7 @@ register_judge(Judge(
     _strict_gait_decide, needs=_STRICT_GAIT_KEYS))
 
 
+_GAIT3D_LABELS = ("fallen", "bound", "walk", "turn", "other")     # gpmotion.gaits3d.LABELS
 _GAIT3D_KEYS = tuple(f"gait3d_{k}" for k in (
     "forward", "turn_deg", "facing_deg", "fell", "flights", "landed_on_feet", "steps", "paired",
     "pair_support"))
@@ -156,8 +157,7 @@ def _gait3d_decide(kept: dict, expect: list):
 
 register_judge(Judge(
     "gait3d", "the 3-D creature classifier (gpmotion.gaits3d: fallen, bound, walk, turn); "
-    "success: an expected label", ("fallen", "bound", "walk", "turn", "other"),
-    _gait3d_decide, needs=_GAIT3D_KEYS))
+    "success: an expected label", _GAIT3D_LABELS, _gait3d_decide, needs=_GAIT3D_KEYS))
 
 # Auslander et al. §4.3: Bob's time-based walks fail "after two or three steps"
 LONG_WALK_STEPS = 5
@@ -174,8 +174,7 @@ def _long_walk_decide(kept: dict, expect: list):
 register_judge(Judge(
     "long-walk", f"a 3-D biped's walk (gpmotion.gaits3d) of ≥ {LONG_WALK_STEPS} forward-facing "
     "steps, the feet taking turns; success: an expected label",
-    (LONG_WALK, "walk", "fallen", "bound", "turn", "other"), _long_walk_decide,
-    needs=_GAIT3D_KEYS))
+    (LONG_WALK, *_GAIT3D_LABELS), _long_walk_decide, needs=_GAIT3D_KEYS))
 
 
 # Rex's walk → turn → walk: every stage judged on its own frames of the composite
