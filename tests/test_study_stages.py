@@ -40,18 +40,26 @@ search = { n_generations = 2 }
 """
 
 
-def test_the_walk_turn_walk_judge_gives_the_recorded_sequence_its_verdict():
-    """A completed walk → turn → walk (the creatures study's seed 0), judged
-    from its controllers."""
+def test_the_walk_turn_walk_judges_name_each_stage_on_its_own_frames():
+    """The creatures study's tune seed 0, judged from its controllers: by
+    distance and heading it completes (walk 1.58 m, turn 90°, walk 1.06 m);
+    by gaits3d its first walk is a walk (3 steps, heading within 30°) and its
+    turn a turn, but its second walk turns 32°, so strictly it does not."""
     d = ROOT / "gpmotion" / "studies" / "creatures" / "controllers"
     kept = rex_sequence_measures([d / f"rex-sequence-seed0-{s}.json" for s in ("walk", "turn", "walk2")],
                                  ["walk", "turn", "walk2"])
-    assert get_judge("walk-turn-walk").decide(kept, []) == (True, "completes")
+    assert get_judge("walk-turn-walk-loose").decide(kept, []) == (True, "completes")
     assert not any(kept[f"{n}_fell"] for n in ("walk", "turn", "walk2"))
     assert round(kept["walk_distance_m"], 2) == 1.58 and round(kept["turn_turn_deg"]) == 90
     assert round(kept["walk2_distance_m"], 2) == 1.06
     shorter = dict(kept, walk2_distance_m=0.9)
-    assert get_judge("walk-turn-walk").decide(shorter, []) == (False, "incomplete")
+    assert get_judge("walk-turn-walk-loose").decide(shorter, []) == (False, "incomplete")
+    assert kept["walk_gait3d_steps"] == 3 and round(kept["walk2_gait3d_turn_deg"]) == 32
+    assert get_judge("walk-turn-walk").decide(kept, []) == (False, "incomplete")
+    held = dict(kept, walk2_gait3d_turn_deg=29.0)            # the second walk holding its heading
+    assert get_judge("walk-turn-walk").decide(held, []) == (True, "completes")
+    fell = dict(held, turn_gait3d_fell=True)
+    assert get_judge("walk-turn-walk").decide(fell, []) == (False, "incomplete")
 
 
 def test_stages_run_from_the_earlier_stages_with_their_own_settings(tmp_path):

@@ -140,9 +140,9 @@ register_judge(Judge(
 
 
 _GAIT3D_LABELS = ("fallen", "bound", "walk", "turn", "other")     # gpmotion.gaits3d.LABELS
-_GAIT3D_KEYS = tuple(f"gait3d_{k}" for k in (
-    "forward", "turn_deg", "facing_deg", "fell", "flights", "landed_on_feet", "steps", "paired",
-    "pair_support"))
+_GAIT3D_MEASURES = ("forward", "turn_deg", "facing_deg", "fell", "flights", "landed_on_feet",
+                    "steps", "paired", "pair_support")
+_GAIT3D_KEYS = tuple(f"gait3d_{k}" for k in _GAIT3D_MEASURES)
 
 
 def _gait3d_label(kept: dict) -> str:
@@ -187,42 +187,65 @@ def rex_sequence_measures(paths, names) -> dict:
     from dataclasses import replace
 
     from ..compose import composite
+    from ..gaits3d import measures as gait3d_measures
     from ..tasks._creature3d import creature_measures
     from ..tasks.rex_walk import RexTask
     comp = composite.from_controllers([str(p) for p in paths], names=list(names))
     traj, bounds = composite.run(comp)
-    whole, parts = traj.episode(0), []
+    whole, parts, pieces = traj.episode(0), [], []
     for k in range(len(paths)):
         sl = slice(int(bounds[0, k]), int(bounds[0, k + 1]) + 1)
         piece = replace(whole, q=whole.q[:, sl], qd=whole.qd[:, sl], com=whole.com[:, sl],
                         contact_force=whole.contact_force[:, sl], times=whole.times[sl])
+        pieces.append(piece)
         parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
                                        min_height=RexTask.min_height))
     kept = {}
-    for name, p in zip(names, parts):
+    for name, p, piece in zip(names, parts, pieces):
         kept[f"{name}_distance_m"] = float(p["distance"][0])
         kept[f"{name}_turn_deg"] = float(np.degrees(p["turn"][0]))
         kept[f"{name}_fell"] = bool(p["fall"][0] > 0)
+        g = gait3d_measures(piece, RexTask.feet, RexTask.foot_sites, RexTask.foot_groups)
+        kept.update({f"{name}_gait3d_{k}": g[k] for k in _GAIT3D_MEASURES})
     kept["stages"] = list(names)
     return kept
 
 
-def _sequence_decide(kept: dict, expect: list):
-    """walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m (stages in order), never fallen."""
+def _three_stages(kept: dict, judge: str) -> list:
     names = kept["stages"]
     if len(names) != 3:
-        raise ValueError(f"judge 'walk-turn-walk' needs three stages, got {names}")
-    w1, t, w2 = names
+        raise ValueError(f"judge {judge!r} needs three stages, got {names}")
+    return names
+
+
+def _sequence_decide(kept: dict, expect: list):
+    """Each stage named by gaits3d on its own frames: walk, turn, walk."""
+    names = _three_stages(kept, "walk-turn-walk")
+    labels = [_gait3d_label({k[len(n) + 1:]: v for k, v in kept.items() if k.startswith(f"{n}_gait3d_")})
+              for n in names]
+    ok = labels == ["walk", "turn", "walk"]
+    return ok, "completes" if ok else "incomplete"
+
+
+def _sequence_loose_decide(kept: dict, expect: list):
+    """walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m (stages in order), never fallen."""
+    w1, t, w2 = _three_stages(kept, "walk-turn-walk-loose")
     ok = (kept[f"{w1}_distance_m"] >= SEQUENCE_WALK_M and kept[f"{t}_turn_deg"] >= SEQUENCE_TURN_DEG
           and kept[f"{w2}_distance_m"] >= SEQUENCE_WALK_M
-          and not any(kept[f"{n}_fell"] for n in names))
+          and not any(kept[f"{n}_fell"] for n in (w1, t, w2)))
     return ok, "completes" if ok else "incomplete"
 
 
 register_judge(Judge(
-    "walk-turn-walk", "a 3-D creature's walk, turn, walk as one composite: walk ≥ 1 m, "
-    "turn ≥ 45°, walk ≥ 1 m, never fallen", ("completes", "incomplete"),
-    _sequence_decide, composite=True, needs=("stages",)))
+    "walk-turn-walk", "a 3-D biped's walk, turn, walk as one composite, each stage named on its "
+    "own frames by gpmotion.gaits3d: a walk (≥ 2 forward-facing steps, the feet taking turns, "
+    "≥ 1 m forward), a turn (heading ≥ 45°, not fallen), a walk",
+    ("completes", "incomplete"), _sequence_decide, composite=True, needs=("stages",)))
+
+register_judge(Judge(
+    "walk-turn-walk-loose", "a 3-D creature's walk, turn, walk as one composite by distance "
+    "and heading only: walk ≥ 1 m, turn ≥ 45°, walk ≥ 1 m, never fallen",
+    ("completes", "incomplete"), _sequence_loose_decide, composite=True, needs=("stages",)))
 
 ROBUST_TRIALS, ROBUST_REQUIRE = 100, 0.9
 
@@ -246,4 +269,5 @@ register_judge(Judge(
     "(gpmotion robustness)", ("robust", "fragile"), _robust_decide,
     needs=("robust_success_rate",), extra=robust_measures))
 
-COMPOSITE_MEASURES = {"walk-turn-walk": rex_sequence_measures}
+COMPOSITE_MEASURES = {"walk-turn-walk": rex_sequence_measures,
+                      "walk-turn-walk-loose": rex_sequence_measures}
