@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-HELP = "grids of searches from a spec (TOML): run, table, plot, list, show, publish"
+HELP = "grids of searches from a spec (TOML): run, amend, table, plot, list, show, publish"
 
 DESCRIPTION = """\
 A study is configurations × seeds × starts (× stages) of searches, each run
@@ -18,13 +18,17 @@ were chosen on them: counts only) and report_seeds (fresh: the rates, with
   gpmotion study show auslander-2d             its configurations and ledger
   gpmotion study run auslander-2d --out runs/a2d --seeds report --workers 2
   gpmotion study run SPEC.toml --out DIR --quick
+  gpmotion study amend SPEC.toml --out DIR     bind DIR to an amended spec (new
+                                               configurations, labels, judges)
   gpmotion study table DIR [--judge gait] [--format md|csv|json] [--seeds tune]
   gpmotion study plot DIR                      rates and learning curves (PNG)
   gpmotion study publish [--check]             rewrite the docs' study tables
 
 Kill it at any moment (Ctrl-C, SIGTERM, SIGKILL): the same `study run`
 command continues and gives the same rows.  A changed spec is refused in an
-existing DIR.
+existing DIR, unless `study amend` shows the amendment leaves every row
+true (a new configuration, label or judge: rows are re-judged from their
+kept measures).
 """
 
 
@@ -50,6 +54,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument("--runs", metavar="DIR", help="where the searches' run directories go "
                    "(default OUT/runs)")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
+    a = sub.add_parser("amend", help="bind a study directory to an amended spec whose "
+                       "searches with rows are unchanged (runs nothing)")
+    a.add_argument("spec", help="the amended spec file (SPEC.toml) or a shipped study's name")
+    a.add_argument("--out", required=True, help="the study directory")
+    a.add_argument("--quick", action="store_true", help="the directory was run with --quick")
     t = sub.add_parser("table", help="the table of a study directory or a shipped study")
     t.add_argument("study", help="a study directory or a shipped study's name")
     t.add_argument("--format", choices=["md", "csv", "json"], default="md")
@@ -72,7 +81,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_command(args) -> int:
-    return {"run": _run, "table": _table, "plot": _plot, "list": _list, "show": _show,
+    return {"run": _run, "amend": _amend, "table": _table, "plot": _plot, "list": _list, "show": _show,
             "publish": _publish}[args.study_cmd](args)
 
 
@@ -95,6 +104,24 @@ def _run(args) -> int:
         if any(r["seeds"] == which and r["seed"] in seeds for r in rows):
             print(f"\n{which} seeds:\n")
             print(markdown(summarize(spec, rows, which)), end="")
+    return 0
+
+
+def _amend(args) -> int:
+    from ..study import spec_path
+    from ..study.amend import amend
+    from ..study.spec import load
+    spec = load(spec_path(args.spec), quick=args.quick)
+    a = amend(args.out, spec)
+    if a.same:
+        print(f"{args.out}: already bound to this spec; nothing changed")
+        return 0
+    what = [f"added {', '.join(a.added)}"] if a.added else []
+    what += [f"{n} re-judged {old} → {new}" for n, (old, new) in a.rejudged.items()]
+    if a.rejudged:
+        what.append(f"{a.changed} verdicts changed")
+    print(f"{args.out}: bound to {args.spec} (digest {spec.digest()[:12]}…)"
+          + (f"; {'; '.join(what)}" if what else "; labels or comments only"))
     return 0
 
 
