@@ -121,7 +121,7 @@ def _amend(args) -> int:
     if a.rejudged:
         what.append(f"{a.changed} verdicts changed")
     print(f"{args.out}: bound to {args.spec} (digest {spec.digest()[:12]}…)"
-          + (f"; {'; '.join(what)}" if what else "; labels or comments only"))
+          + (f"; {'; '.join(what)}" if what else "; every row unchanged"))
     return 0
 
 
