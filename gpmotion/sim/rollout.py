@@ -139,7 +139,17 @@ class Trajectory:
         return self._sites_and_segments()[0]
 
     def site(self, name: str) -> np.ndarray:
-        return self.sites()[..., self.figure.site_names.index(name), :]
+        """World positions of one site [E, F, 2 or 3]: the same numbers as
+        ``sites()[..., k, :]`` (each point is computed on its own), without the
+        other points when those are not computed yet (a score that reads one
+        site of a generation's episodes pays for one point, not all)."""
+        k = self.figure.site_names.index(name)
+        whole = self.__dict__.get("_memo_sites_segments")
+        if whole is not None and whole[0] is self.q:
+            return whole[1][0][..., k, :]
+        f = self.figure
+        return self._memo(f"_site_{name}", lambda: self._points(f.site_link[k:k + 1],
+                                                                f.site_pos[k:k + 1])[..., 0, :])
 
     def segments(self) -> np.ndarray:
         """Capsule end points [E, F, n_seg, 2 (a/b), 2 or 3]."""
