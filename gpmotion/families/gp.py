@@ -132,6 +132,11 @@ _OWN = dict([
                "the task's subgoal flags are GP terminals too: 0 until the subgoal is first "
                "met, then 1 (lamp_hop: arrived; lamp_limbo: passed_pole, arrived)",
                "GP subgoal terminals", dict(action="store_const", const=True)),
+    _gp_option("--fast-trig", "family", "fast_trig",
+               "GP sin and cos by an inlined polynomial (within 1 ulp of libm, faster "
+               "trees; results then differ from libm's in the last bits, so a search may go "
+               "elsewhere); recorded with the run, its controllers replay with it",
+               "GP fast trigonometry", dict(action="store_const", const=True)),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
                "the GP target time constant", dict(type=float), number(0.002, 10),
@@ -187,6 +192,17 @@ def _check_erc_range(r):
         raise ValueError(f"erc_range must be [lo, hi] with finite lo < hi within ±1e6, got {r!r}")
 
 
+def _check_fast_trig(value, info) -> bool:
+    """fast_trig is a bool, and only where a primitive calls math.sin or math.cos."""
+    from ..gp.interpreter import trig_primitives
+    if not isinstance(value, bool):
+        raise ValueError(f"GP fast_trig must be true or false, got {value!r}")
+    if value and not trig_primitives(info.primitives):
+        raise ValueError(f"GP fast_trig: the function set ({', '.join(info.primitive_names)}) "
+                         "calls no math.sin or math.cos, so there is nothing to make fast")
+    return value
+
+
 @register_family
 class GPFamily(Family):
     """One tree per actuator (Gritz & Hahn); genome = list of token lists."""
@@ -199,11 +215,13 @@ class GPFamily(Family):
     legacy_options = {"targets": "angle"}     # before rate targets, every tree gave an angle
 
     def __init__(self, task, primitives=None, erc_range=(-1.0, 1.0), tau=0.1,
-                 terminals=None, subgoals=False, targets=None, **options):
+                 terminals=None, subgoals=False, targets=None, fast_trig=False, **options):
         # tau: the fixed time constant of GP targets under `kinematic` actuation
         # (0.1 s = the shortest τ BSR rules may use, so comparisons are fair);
         # terminals: sense names replacing the task's terminal set (a preset's);
-        # subgoals: add the task's subgoal flags as terminals (gpmotion.gp.subgoals)
+        # subgoals: add the task's subgoal flags as terminals (gpmotion.gp.subgoals);
+        # fast_trig: the interpreter's sin/cos inlined (gpmotion.gp.fast_trig), recorded
+        # only when set so that every other run's config is what it was
         super().__init__(task, primitives=list(primitives) if primitives else None,
                          erc_range=list(erc_range), tau=float(tau), **options)
         if terminals is not None:
@@ -230,6 +248,9 @@ class GPFamily(Family):
         self.actuators = task.controlled_actuators()
         self.options["targets"] = targets = targets or settings.targets
         self.law = target_law(task, self.actuators, targets)
+        self.fast_trig = _check_fast_trig(fast_trig, self.info)
+        if self.fast_trig:
+            self.options["fast_trig"] = True
 
     @property
     def pset(self):
@@ -282,7 +303,7 @@ class GPFamily(Family):
     def encode(self, genomes):
         return bytecode.encode_batch(list(genomes), self.info, self.actuators,
                                      subgoals=self.subgoal_table, law=self.law,
-                                     task_programs=self.task_programs)
+                                     task_programs=self.task_programs, fast_trig=self.fast_trig)
 
     def copy(self, genome):
         return [list(t) for t in genome]

@@ -115,7 +115,8 @@ def _branch_layout(sel_frags, branch_frags, op):
 
 
 def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = False,
-                 fuse: bool = True) -> tuple[list[tuple[int, int]], list[float], int]:
+                 fuse: bool = True, fast_trig: bool = False
+                 ) -> tuple[list[tuple[int, int]], list[float], int]:
     """One tree -> (ops [(opcode, operand)], constants, max stack need).
 
     ``lazy``: conditional primitives evaluate only the branch taken (jumps);
@@ -128,7 +129,8 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = False,
     ops, ``benchmarks/gp_op_stats.py``) and no rollout got measurably faster
     (``benchmarks/gp_fold_fuse.py``).  ``fuse``: a
     primitive whose last argument is a sense reads it itself (operand
-    OP_ARG_SENSE0 + sense), one op for the pair.
+    OP_ARG_SENSE0 + sense), one op for the pair.  ``fast_trig``: fold with
+    the kernel that runs the tree (gpmotion.gp.interpreter).
     """
     prims = info.primitives
     prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
@@ -151,7 +153,7 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = False,
             ops, raw, need = _node_ops(op, p, children, lazy, fuse)
             const = all(c[3] for c in children)
             if fold and const and raw <= STACK_CAP:
-                ops, need = [(OP_PUSH_CONST, _fold(info, ops))], 1
+                ops, need = [(OP_PUSH_CONST, _fold(info, ops, fast_trig))], 1
             pending.append((ops, raw, need, const))
         elif is_erc(node):
             pending.append(([(OP_PUSH_CONST, clamp(float(node.value)))], 1, 1, True))
@@ -196,7 +198,7 @@ def _node_ops(op: int, p, children, lazy: bool, fuse: bool):
     return ops, needs[0], needs[1]
 
 
-def _fold(info: PsetInfo, frag) -> float:
+def _fold(info: PsetInfo, frag, fast_trig: bool = False) -> float:
     """The value of a fragment that reads no state, from the generated
     kernel's own ``run_tree`` (the same compiled float64 operations, clamp
     and protected primitives as at run time: no second implementation)."""
@@ -205,7 +207,7 @@ def _fold(info: PsetInfo, frag) -> float:
     for op, arg in frag:
         ci += [op, k if op == OP_PUSH_CONST else arg]
         k += op == OP_PUSH_CONST
-    run_tree = _kernel(info).run_tree
+    run_tree = _kernel(info, fast_trig).run_tree
     return float(run_tree(np.asarray(ci, dtype=np.int64), np.asarray(consts + [0.0]),
                           0, _NO_SENSES, np.zeros(STACK_CAP)))
 
@@ -214,18 +216,18 @@ _NO_SENSES = np.zeros(1)
 _KERNELS: dict = {}
 
 
-def _kernel(info: PsetInfo):
+def _kernel(info: PsetInfo, fast_trig: bool = False):
     """The generated interpreter module for ``info``'s primitives (imported once)."""
-    key = tuple(p.source for p in info.primitives)
+    key = (tuple(p.source for p in info.primitives), fast_trig)
     if key not in _KERNELS:
-        _KERNELS[key] = load_interpreter(info)
+        _KERNELS[key] = load_interpreter(info, fast_trig)
     return _KERNELS[key]
 
 
 def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int],
                  lazy: bool = True, subgoals: Sequence[tuple[int, int, float]] = (),
                  law: TargetLaw | None = None, task_programs: Sequence = (),
-                 fold: bool = False, fuse: bool = True):
+                 fold: bool = False, fuse: bool = True, fast_trig: bool = False):
     """A list of trees (one per actuator) -> (ci int64[:], cf float64[:]).
 
     ``subgoals``: (sense index, test code, threshold) per subgoal flag of
@@ -241,7 +243,7 @@ def encode_trees(trees: Sequence, info: PsetInfo, actuator_indices: Sequence[int
         raise ValueError(f"{len(task_programs)} task sense programs for "
                          f"{len(info.task_sense_names)} task senses")
     n = len(trees)
-    compiled = [_compiled(t, info, lazy, fold, fuse) for t in trees]
+    compiled = [_compiled(t, info, lazy, fold, fuse, fast_trig) for t in trees]
     programs = compiled + [tuple(p) for p in task_programs]
     ci = ([n, max((c[2] for c in programs), default=0), len(subgoals), 0, 0, len(task_programs)]
           + [0] * (3 * len(programs)))
@@ -273,33 +275,37 @@ _COMPILED: dict = {}
 _COMPILED_MAX = 100_000
 
 
-def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = False, fuse: bool = True):
+def _compiled(t, info: PsetInfo, lazy: bool, fold: bool = False, fuse: bool = True,
+              fast_trig: bool = False):
+    fast_trig = fold and fast_trig          # only folding runs the kernel
     if isinstance(t, gp.PrimitiveTree):
-        return compile_tree(t, info, lazy, fold, fuse)
-    key = (info.hash, info.sense_indices, lazy, fold, fuse, repr(list(t)))
+        return compile_tree(t, info, lazy, fold, fuse, fast_trig)
+    key = (info.hash, info.sense_indices, lazy, fold, fuse, fast_trig, repr(list(t)))
     hit = _COMPILED.get(key)
     if hit is None:
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.clear()
-        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy, fold, fuse)
+        hit = _COMPILED[key] = compile_tree(tokens_to_tree(t, info), info, lazy, fold, fuse,
+                                            fast_trig)
     return hit
 
 
 def encode_batch(individuals: Sequence[Sequence], info: PsetInfo,
                  actuator_indices: Sequence[int], module: str | None = None,
                  lazy: bool = True, subgoals=(), law: TargetLaw | None = None,
-                 task_programs=(), fold: bool = False, fuse: bool = True) -> ControllerBatch:
+                 task_programs=(), fold: bool = False, fuse: bool = True,
+                 fast_trig: bool = False) -> ControllerBatch:
     """Individuals (each a list of trees or token lists) -> a rectangular batch.
 
-    ``module`` defaults to the generated interpreter for ``info``; ``lazy``
-    ``fold`` and ``fuse`` as in :func:`compile_tree` (the other forms are
-    for benchmarks and tests); ``law`` and ``task_programs`` as in
-    :func:`encode_trees`.
+    ``module`` defaults to the generated interpreter for ``info`` (with the
+    fast sine and cosine when ``fast_trig``); ``lazy`` ``fold`` and ``fuse``
+    as in :func:`compile_tree` (the other forms are for benchmarks and
+    tests); ``law`` and ``task_programs`` as in :func:`encode_trees`.
     """
     if module is None:
-        module = str(interpreter_path(info))
+        module = str(interpreter_path(info, fast_trig))
     rows = [encode_trees(ind, info, actuator_indices, lazy, subgoals, law, task_programs, fold,
-                         fuse)
+                         fuse, fast_trig)
             for ind in individuals]
     li = max([len(r[0]) for r in rows] + [HEADER])
     lf = max([len(r[1]) for r in rows] + [1])

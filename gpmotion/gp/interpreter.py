@@ -21,6 +21,10 @@ Semantics (identical to ``compile_reference`` and tests/reference):
 * a primitive's operand ``OP_ARG_SENSE0 + i`` fuses the pair "push sense i,
   apply": the same operations in one dispatch (the most frequent pairs in
   evolved trees end in a sense, ``benchmarks/gp_op_stats.py``).
+* ``fast_trig`` (opt-in, a second module): the primitives' ``math.sin`` and
+  ``math.cos`` calls become the inlined sine and cosine of
+  :mod:`gpmotion.gp.fast_trig` (within 1 ulp of libm, not bit for bit).
+  Off, the module's source is exactly what it was before the option.
 
 The stack lives in ``cstate`` (its first STACK_CAP slots), the subgoal
 flags after it, then the task senses, then the target law's state
@@ -30,6 +34,7 @@ task senses (their programs follow the trees') before it runs the trees.
 """
 from __future__ import annotations
 
+import ast
 from pathlib import Path
 
 from gpmotion.cache import digest, import_file, write_module
@@ -224,19 +229,62 @@ def _branch(op: int, p: Primitive) -> str:
                   "                return 0.0\n")
 
 
-def _copy(p: Primitive) -> str:
-    return f"@njit(**JIT, inline=\"always\")\n{p.source}\n"
+def _copy(p: Primitive, fast_trig: bool = False) -> str:
+    source = _with_fast_trig(p.source) if fast_trig else p.source
+    return f"@njit(**JIT, inline=\"always\")\n{source}\n"
 
 
-def primitive_module_source(prims: list[Primitive]) -> str:
+_TRIG = {"sin": "_ft_sin", "cos": "_ft_cos"}     # math.<name> -> the fast function
+
+
+def _trig_call(node) -> str | None:
+    """``sin``/``cos`` when ``node`` calls math.sin / math.cos, else None."""
+    f = getattr(node, "func", None) if isinstance(node, ast.Call) else None
+    if (isinstance(f, ast.Attribute) and f.attr in _TRIG and isinstance(f.value, ast.Name)
+            and f.value.id == "math"):
+        return f.attr
+    return None
+
+
+def trig_primitives(prims: list[Primitive]) -> list[str]:
+    """Names of the primitives that call math.sin or math.cos (what fast_trig changes)."""
+    return [p.name for p in prims if any(_trig_call(n) for n in ast.walk(ast.parse(p.source)))]
+
+
+def _with_fast_trig(source: str) -> str:
+    """A primitive's source with its math.sin / math.cos calls made fast-trig calls."""
+    tree = ast.parse(source)
+    for node in ast.walk(tree):
+        name = _trig_call(node)
+        if name:
+            node.func = ast.Name(_TRIG[name], ast.Load())
+    return ast.unparse(tree) + "\n"
+
+
+def fast_trig_source() -> str:
+    """gpmotion.gp.fast_trig's constants and functions, each function njit-inlined."""
+    from gpmotion.gp import fast_trig
+    tree = ast.parse(Path(fast_trig.__file__).read_text())
+    out = ["# fast sin/cos: gpmotion.gp.fast_trig, copied (this file's hash covers it)"]
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and all(t.id.startswith("_FT_") for t in node.targets):
+            out.append(ast.unparse(node))
+        elif isinstance(node, ast.FunctionDef):
+            out.append(f"\n\n@njit(**JIT, inline=\"always\")\n{ast.unparse(node)}")
+    return "\n".join(out) + "\n\n\n"
+
+
+def primitive_module_source(prims: list[Primitive], fast_trig: bool = False) -> str:
     """Module with just the njit copies (used by check_primitive)."""
     imports = sorted({line for p in prims for line in p.imports.splitlines()})
     head = _HEAD.format(names=", ".join(p.name for p in prims),
                         imports="\n".join(imports), clamp=float(CLAMP), jit=KERNEL_JIT)
-    return head + "\n".join(_copy(p) for p in prims)
+    if fast_trig:
+        head += fast_trig_source()
+    return head + "\n".join(_copy(p, fast_trig) for p in prims)
 
 
-def interpreter_source(info: PsetInfo) -> str:
+def interpreter_source(info: PsetInfo, fast_trig: bool = False) -> str:
     prims = info.primitives
     body = _RUN_TREE.format(
         header=HEADER, push_sense=OP_PUSH_SENSE, push_const=OP_PUSH_CONST, jump=OP_JUMP,
@@ -244,19 +292,21 @@ def interpreter_source(info: PsetInfo) -> str:
         max_task_senses=MAX_TASK_SENSES, rate_state=RATE_STATE,
         law_width=LAW_WIDTH,
         branches="".join(_branch(OP_PRIM0 + k, p) for k, p in enumerate(prims)).rstrip("\n"))
-    return primitive_module_source(prims) + "\n" + body
+    return primitive_module_source(prims, fast_trig) + "\n" + body
 
 
-def interpreter_path(info: PsetInfo) -> Path:
+def interpreter_path(info: PsetInfo, fast_trig: bool = False) -> Path:
     """Write (if needed) the kernel module for ``info``; return its path.
 
-    The file is named by a hash of its source (primitives + generator), not
-    of the terminals: tasks with different senses share one compiled module.
+    The file is named by a hash of its source (primitives + generator, and
+    the fast sine and cosine with ``fast_trig``), not of the terminals: tasks
+    with different senses share one compiled module.  The rollout kernel is
+    keyed by this file's content, so each form has its own.
     """
-    src = interpreter_source(info)
+    src = interpreter_source(info, fast_trig)
     return write_module(f"gp_{digest(GENERATOR_VERSION, src)}", src)
 
 
-def load_interpreter(info: PsetInfo):
+def load_interpreter(info: PsetInfo, fast_trig: bool = False):
     """Import the generated kernel module (``init``, ``control``, ``run_tree``)."""
-    return import_file(interpreter_path(info))
+    return import_file(interpreter_path(info, fast_trig))
