@@ -1,7 +1,8 @@
 """Work to a solved, polished motion: `gpmotion run TASK` on its defaults, beside the old ones.
 
     python benchmarks/time_to_solution.py [--tasks lamp_hop,lamp_limbo] [--seeds 0,1]
-        [--threads 1] [--only new|old] [--search KEY=VALUE ...] [--artifacts]
+        [--threads 1] [--only new|old] [--search KEY=VALUE ...] [--option KEY=VALUE ...]
+        [--artifacts]
 
 Per task and seed, one run on the old defaults (generations 40 run in full:
 ``OLD``) and one on today's, in this process, printing for each:
@@ -36,6 +37,9 @@ episodes could stop early (each a count of simulated steps):
   far reached the parent's cost.  The bound is the monotone part of the lamp
   terms (late, head_hit, fell, pole; every other term bounded by 0), so
   lamp tasks only.
+
+``--option KEY=VALUE`` sets a family option of the new runs (e.g.
+``fast_trig=true``), as ``--search`` sets a search setting.
 
 Seconds depend on the machine and its load; steps and the ratios do not.
 """
@@ -219,25 +223,27 @@ def _timed_finish(spent: list):
 
 
 def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: bool,
-            family: str | None = None, episodes: bool = False) -> dict:
+            family: str | None = None, episodes: bool = False, options: dict | None = None) -> dict:
     spent: list[float] = []
     orig_finish = run_module._finish
     run_module._finish = _timed_finish(spent)
     try:
         if not episodes:
-            return _one_run(task, seed, search, threads, artifacts, spent, family)
+            return _one_run(task, seed, search, threads, artifacts, spent, family, options)
         with EpisodeMeter() as em:
-            r = _one_run(task, seed, search, threads, artifacts, spent, family)
+            r = _one_run(task, seed, search, threads, artifacts, spent, family, options)
         return {**r, **{k: getattr(em, k) for k in EPISODE_COLUMNS}}
     finally:
         run_module._finish = orig_finish
 
 
-def _one_run(task, seed, search, threads, artifacts, spent, family=None) -> dict:
+def _one_run(task, seed, search, threads, artifacts, spent, family=None, options=None) -> dict:
     with tempfile.TemporaryDirectory() as d, KernelMeter() as meter:
         out = Path(d) / "run"
         t0 = time.perf_counter()
         fam = {} if family is None else {"family": family}
+        if options:
+            fam["family_options"] = dict(options)
         run(RunConfig(task=task, seed=seed, search=search, threads=threads, **fam), out, quiet=True,
             artifacts=artifacts)
         wall = time.perf_counter() - t0
@@ -274,6 +280,8 @@ def main(argv=None):
     ap.add_argument("--only", choices=["old", "new"], default=None)
     ap.add_argument("--search", action="append", default=[], metavar="KEY=VALUE",
                     help="a search setting of the new runs (JSON value)")
+    ap.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                    help="a family option of the new runs (JSON value), e.g. fast_trig=true")
     ap.add_argument("--artifacts", action="store_true", help="draw the pictures, as `gpmotion run`")
     ap.add_argument("--family", default=None, help="controller family (default: gp)")
     ap.add_argument("--episodes", action="store_true",
@@ -281,6 +289,7 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     new = {k: _value(v) for k, v in (s.split("=", 1) for s in a.search)}
+    options = {k: _value(v) for k, v in (s.split("=", 1) for s in a.option)}
     kinds = [k for k in ("old", "new") if a.only in (None, k)]
     rows = []
     print(f"{'task':<22}{'seed':>5} {'':<4}{'gens':>5}{'evals':>7}{'steps':>12}{'to_bar':>12}"
@@ -291,7 +300,7 @@ def main(argv=None):
                 old = {**OLD, **({"generations": OLD_GENERATIONS[task]}
                                  if task in OLD_GENERATIONS else {})}
                 r = one_run(task, seed, old if kind == "old" else new, a.threads, a.artifacts,
-                            a.family, a.episodes)
+                            a.family, a.episodes, options if kind == "new" else None)
                 r["defaults"] = kind
                 rows.append(r)
                 print(f"{task:<22}{seed:>5} {kind:<4}{r['generations']:>5}{r['evals']:>7}"
