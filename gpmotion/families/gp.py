@@ -133,9 +133,9 @@ _OWN = dict([
                "met, then 1 (lamp_hop: arrived; lamp_limbo: passed_pole, arrived)",
                "GP subgoal terminals", dict(action="store_const", const=True)),
     _gp_option("--fast-trig", "family", "fast_trig",
-               "GP sin and cos by an inlined polynomial (within 1 ulp of libm, faster "
-               "trees; results then differ from libm's in the last bits, so a search may go "
-               "elsewhere); recorded with the run, its controllers replay with it",
+               "GP sin and cos inlined (fdlibm's polynomials, within 1 ulp of libm) instead "
+               "of libm's calls: faster trees, but not libm's bits, so a search takes another "
+               "path (off by default; recorded with the run, its controllers replay with it)",
                "GP fast trigonometry", dict(action="store_const", const=True)),
     _gp_option("--tau", "family", "tau",
                "time constant (s) of GP targets under --actuation kinematic (default 0.1)",
@@ -221,7 +221,7 @@ class GPFamily(Family):
         # terminals: sense names replacing the task's terminal set (a preset's);
         # subgoals: add the task's subgoal flags as terminals (gpmotion.gp.subgoals);
         # fast_trig: the interpreter's sin/cos inlined (gpmotion.gp.fast_trig), recorded
-        # only when set so that every other run's config is what it was
+        # only when set: a default run's config does not mention it
         super().__init__(task, primitives=list(primitives) if primitives else None,
                          erc_range=list(erc_range), tau=float(tau), **options)
         if terminals is not None:

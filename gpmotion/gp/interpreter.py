@@ -24,7 +24,8 @@ Semantics (identical to ``compile_reference`` and tests/reference):
 * ``fast_trig`` (opt-in, a second module): the primitives' ``math.sin`` and
   ``math.cos`` calls become the inlined sine and cosine of
   :mod:`gpmotion.gp.fast_trig` (within 1 ulp of libm, not bit for bit).
-  Off, the module's source is exactly what it was before the option.
+  Off, the module's source holds none of it (the default module keeps its
+  hash, its rollout kernel and its bits).
 
 The stack lives in ``cstate`` (its first STACK_CAP slots), the subgoal
 flags after it, then the task senses, then the target law's state
