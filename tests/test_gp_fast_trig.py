@@ -155,6 +155,7 @@ def test_a_controller_searched_with_fast_trig_replays_with_it(tmp_path):
         out, quiet=True, artifacts=False)
     config = json.loads((out / "config.json").read_text())
     assert config["family_config"]["fast_trig"] is True
+    assert config["run"]["family_options"] == {"fast_trig": True}       # what a resume rebuilds
     best = json.loads((out / "best.json").read_text())
     assert best["options"]["fast_trig"] is True
     task, family, actuation, genome, _ = load_controller(out)
