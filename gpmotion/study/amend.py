@@ -18,15 +18,14 @@ with one line, and nothing on disk changes.
 """
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..records import atomic_write_text, envelope
+from ..records import atomic_write_text
 from ..rundir import LOCK, RunDir
 from .judge import rejudge
-from .ledger import RESULTS, STUDY, read_rows, read_study
+from .ledger import RESULTS, STUDY, read_rows, read_study, row_line, study_text
 from .spec import Spec, SpecError, parse
 
 
@@ -94,12 +93,8 @@ def amend(directory: str | Path, new: Spec) -> Amendment:
     try:
         amendment, rows = _checked(directory, new)        # what is there now, under the lock
         if amendment.rejudged:                            # rows first: a rerun redoes both
-            atomic_write_text(rd.file(RESULTS), "".join(
-                json.dumps(r, sort_keys=True, separators=(",", ":"), allow_nan=False) + "\n"
-                for r in rows))
-        atomic_write_text(rd.file(STUDY), json.dumps(
-            envelope("study", {"digest": new.digest(), "quick": new.quick, "spec": new.source}),
-            indent=1, ensure_ascii=False) + "\n")
+            atomic_write_text(rd.file(RESULTS), "".join(map(row_line, rows)))
+        atomic_write_text(rd.file(STUDY), study_text(new.digest(), new.source, new.quick))
         if not had_lock:                                  # it only names the holder
             os.unlink(rd.file(LOCK))
     finally:

@@ -192,21 +192,18 @@ def rex_sequence_measures(paths, names) -> dict:
     from ..tasks.rex_walk import RexTask
     comp = composite.from_controllers([str(p) for p in paths], names=list(names))
     traj, bounds = composite.run(comp)
-    whole, parts, pieces = traj.episode(0), [], []
-    for k in range(len(paths)):
+    whole, kept = traj.episode(0), {}
+    for k, name in enumerate(names):
         sl = slice(int(bounds[0, k]), int(bounds[0, k + 1]) + 1)
         piece = replace(whole, q=whole.q[:, sl], qd=whole.qd[:, sl], com=whole.com[:, sl],
                         contact_force=whole.contact_force[:, sl], times=whole.times[sl])
-        pieces.append(piece)
-        parts.append(creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
-                                       min_height=RexTask.min_height))
-    kept = {}
-    for name, p, piece in zip(names, parts, pieces):
+        p = creature_measures(piece, RexTask.feet, max_tilt=RexTask.max_tilt,
+                              min_height=RexTask.min_height)
         kept[f"{name}_distance_m"] = float(p["distance"][0])
         kept[f"{name}_turn_deg"] = float(np.degrees(p["turn"][0]))
         kept[f"{name}_fell"] = bool(p["fall"][0] > 0)
         g = gait3d_measures(piece, RexTask.feet, RexTask.foot_sites, RexTask.foot_groups)
-        kept.update({f"{name}_gait3d_{k}": g[k] for k in _GAIT3D_MEASURES})
+        kept.update({f"{name}_gait3d_{m}": g[m] for m in _GAIT3D_MEASURES})
     kept["stages"] = list(names)
     return kept
 

@@ -31,6 +31,17 @@ def row_key(row: dict) -> tuple:
     return tuple(row[k] for k in ROW_KEYS)
 
 
+def row_line(row: dict) -> str:
+    """A row as its ledger line (compact, keys sorted, no NaN)."""
+    return json.dumps(row, sort_keys=True, separators=(",", ":"), allow_nan=False) + "\n"
+
+
+def study_text(digest: str, spec_doc: dict, quick: bool) -> str:
+    """``study.json``: the spec (in its own order: the table's) and its digest."""
+    return json.dumps(envelope("study", {"digest": digest, "quick": quick, "spec": spec_doc}),
+                      indent=1, ensure_ascii=False) + "\n"
+
+
 def _read_regular(path: Path, limit: int) -> bytes | None:
     """A regular file's bytes (None if absent), never through a symlink."""
     try:
@@ -106,9 +117,7 @@ class StudyDir:
         self.rd = RunDir.create(path, resume=path.is_dir())
         try:
             if fresh:
-                atomic_write_text(self.rd.file(STUDY), json.dumps(
-                    envelope("study", {"digest": digest, "quick": quick, "spec": spec_doc}),
-                    indent=1, ensure_ascii=False) + "\n")     # the spec's order: the table's
+                atomic_write_text(self.rd.file(STUDY), study_text(digest, spec_doc, quick))
             else:
                 have = read_study(path)
                 if have["digest"] != digest:
@@ -169,8 +178,7 @@ class StudyDir:
 
     def append(self, row: dict) -> None:
         """One row, whole or not at all."""
-        line = (json.dumps(row, sort_keys=True, separators=(",", ":"), allow_nan=False)
-                + "\n").encode("utf-8")
+        line = row_line(row).encode("utf-8")
         fd = self._open(os.O_WRONLY | os.O_APPEND | os.O_CREAT)
         try:
             n = os.write(fd, line)
