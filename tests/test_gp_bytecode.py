@@ -412,10 +412,10 @@ def test_kernels_run_without_jit(info, trees, tmp_path):
 
 
 def test_token_lists_encode_as_their_trees_once_remembered(info, trees, monkeypatch):
-    """encode_trees remembers compiled token lists (most trees of a GP
-    generation are unchanged copies): a remembered list encodes exactly as
-    its tree does, lazy and eager apart, and -0.0 apart from 0.0; a
-    remembered list is not compiled again."""
+    """encode_trees remembers compiled trees by their tokens (most trees of
+    a GP generation are unchanged copies): a remembered list encodes exactly
+    as its tree does, lazy and eager apart, and -0.0 apart from 0.0; a tree
+    or list seen before, in either form, is not compiled again."""
     from gpmotion.gp import bytecode
     monkeypatch.setattr(bytecode, "_COMPILED", {})
     toks = [tree_to_tokens(t) for t in trees[:40]]
@@ -428,7 +428,10 @@ def test_token_lists_encode_as_their_trees_once_remembered(info, trees, monkeypa
             for _ in range(2):
                 got = encode_trees([tk], info, [0], lazy=lazy)
                 assert all(np.array_equal(g, w) for g, w in zip(got, want))
-    assert len(calls) == 2 * 40 + 2 * len({repr(t) for t in toks})   # trees always; lists once per mode
+    assert len(calls) == 2 * len({repr(t) for t in toks})            # once per tree and mode
+    for tree in trees[:40]:
+        encode_trees([tree], info, [0])
+    assert len(calls) == 2 * len({repr(t) for t in toks})
     zero, negzero = ["add", "t", 0.0], ["add", "t", -0.0]
     cf0, cf1 = encode_trees([zero], info, [0])[1], encode_trees([negzero], info, [0])[1]
     assert np.copysign(1.0, cf0[-1]) == 1.0 and np.copysign(1.0, cf1[-1]) == -1.0
