@@ -75,7 +75,7 @@ class Limbo:
 @register_task
 class LampLimbo(Limbo, LampHop):
     name = "lamp_limbo"
-    # 40 generations in full: the hop's stop criterion is not measured here
+    # 40 generations in full: shorter schedules solve the limbo less often (docs/speed.md)
     gp = replace(LampHop.gp, defaults={})
     description = "the lamp hops to a target, passing under a limbo pole"
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42,   # standing, the lamp is 0.50 m tall
