@@ -19,10 +19,11 @@ import pytest
 from deap import gp
 
 from gpmotion.gp import primitives as registry
-from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, RATE_STATE, STACK_CAP,
-                                  TargetLaw, encode_batch, encode_trees, tokens_to_tree,
+from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, OP_PRIM0, RATE_STATE,
+                                  STACK_CAP, TargetLaw, compile_tree, encode_batch, encode_trees, tokens_to_tree,
                                   tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
+from gpmotion.gp.primitives import STANDARD
 from gpmotion.gp.pset import build_pset, compile_reference
 from gpmotion.gp.subgoals import MAX_SUBGOALS
 from gpmotion.gp.task_senses import MAX_TASK_SENSES
@@ -370,9 +371,25 @@ def test_pset_rebuild_in_one_process(info):
     assert again.hash == info.hash and again.erc_name == info.erc_name
     other = build_pset(["px"], ["add", "sin"], sense_names=SENSES)
     assert other.hash != info.hash and other.erc_name != info.erc_name
-    assert "prim_iflte" not in interpreter_source(other)
     default = build_pset(TERMS, sense_names=SENSES)       # opt-in primitives stay out
     assert "ifpos" not in default.primitive_names and "iflte" in default.primitive_names
+
+
+def test_function_sets_drawn_from_the_installed_primitives_share_one_kernel():
+    """One GP kernel per install, not per task or preset: a set's opcodes are the
+    installed primitives' (the default set's first, so its bytecode is unchanged)."""
+    default = build_pset(TERMS, sense_names=SENSES)
+    small = build_pset(["px"], ["sub", "add"], sense_names=SENSES)
+    paper = build_pset(TERMS, ["add", "sub", "mul", "div", "ifpos"], sense_names=SENSES)
+    assert interpreter_path(small) == interpreter_path(default) == interpreter_path(paper)
+    assert default.opcode_names[:len(STANDARD)] == STANDARD
+    assert small.opcode_names == default.opcode_names
+    tree = gp.PrimitiveTree.from_string("sub(px, add(px, px))", small.pset)
+    ops = compile_tree(tree, small)[0]
+    assert [op for op, _ in ops if op >= OP_PRIM0] == [OP_PRIM0 + STANDARD.index("add"),
+                                                        OP_PRIM0 + STANDARD.index("sub")]
+    with pytest.raises(ValueError, match="not in this primitive set"):
+        compile_tree(gp.PrimitiveTree.from_string("mul(px, px)", default.pset), small)
 
 
 def test_kernels_run_without_jit(info, trees, tmp_path):

@@ -128,7 +128,7 @@ def test_fast_trees_are_the_reference_interpreter_with_the_twin(seed, depth, s):
     ci, cf = encode_trees([tree], INFO, [0])
     funcs = {p.name: p.func for p in INFO.primitives}
     funcs.update(sin=_twin_scalar(fast_trig_ref.sin), cos=_twin_scalar(fast_trig_ref.cos))
-    want = run_tree_ref(ci, cf, 0, np.array(s), [funcs[n] for n in INFO.primitive_names],
+    want = run_tree_ref(ci, cf, 0, np.array(s), [funcs[n] for n in INFO.opcode_names],
                         [p.select for p in INFO.primitives])
     got = FAST.run_tree(ci, cf, 0, np.array(s), np.zeros(STACK_CAP))
     assert np.float64(got).tobytes() == np.float64(want).tobytes()

@@ -87,7 +87,7 @@ def info():
 
 def _programs(info):
     return [compile_formula(parse(f, SENSES, info.primitive_names), SENSES + ["t"],
-                            info.primitive_names) for f in FORMULAS]
+                            info.opcode_names) for f in FORMULAS]
 
 
 def test_the_kernel_computes_task_senses_as_the_twin(info):

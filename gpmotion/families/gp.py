@@ -197,7 +197,7 @@ def _check_fast_trig(value, info) -> bool:
     from ..gp.interpreter import trig_primitives
     if not isinstance(value, bool):
         raise ValueError(f"GP fast_trig must be true or false, got {value!r}")
-    if value and not trig_primitives(info.primitives):
+    if value and not trig_primitives(info.function_set):
         raise ValueError(f"GP fast_trig: the function set ({', '.join(info.primitive_names)}) "
                          "calls no math.sin or math.cos, so there is nothing to make fast")
     return value
@@ -244,7 +244,7 @@ class GPFamily(Family):
                                flag_names=[g.name for g in goals],
                                task_sense_names=[s.name for s in used])
         self.task_programs = [compile_formula(s.tree, task.figure.sense_names,
-                                              self.info.primitive_names) for s in used]
+                                              self.info.opcode_names) for s in used]
         self.actuators = task.controlled_actuators()
         self.options["targets"] = targets = targets or settings.targets
         self.law = target_law(task, self.actuators, targets)

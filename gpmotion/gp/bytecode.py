@@ -132,8 +132,9 @@ def compile_tree(tree, info: PsetInfo, lazy: bool = True, fold: bool = False,
     OP_ARG_SENSE0 + sense), one op for the pair.  ``fast_trig``: fold with
     the kernel that runs the tree (gpmotion.gp.interpreter).
     """
-    prims = info.primitives
-    prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(prims)}
+    in_set = set(info.primitive_names)
+    prim_op = {p.name: (OP_PRIM0 + k, p) for k, p in enumerate(info.primitives)
+               if p.name in in_set}
     term_sense = dict(zip(info.terminal_names, info.sense_indices))
     nodes = list(tree)
     if not nodes:

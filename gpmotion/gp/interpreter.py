@@ -300,8 +300,10 @@ def interpreter_path(info: PsetInfo, fast_trig: bool = False) -> Path:
     """Write (if needed) the kernel module for ``info``; return its path.
 
     The file is named by a hash of its source (primitives + generator, and
-    the fast sine and cosine with ``fast_trig``), not of the terminals: tasks
-    with different senses share one compiled module.  The rollout kernel is
+    the fast sine and cosine with ``fast_trig``), not of the terminals, and
+    it dispatches every installed primitive (``info.opcode_names``), not only
+    the function set's: tasks with different senses or function sets share
+    one compiled module.  The rollout kernel is
     keyed by this file's content, so each form has its own.
     """
     src = interpreter_source(info, fast_trig)

@@ -238,6 +238,16 @@ def names() -> list[str]:
     return sorted(_REGISTRY)
 
 
+def builtin_names() -> tuple[str, ...]:
+    """The installed primitives (``gpmotion.primitives``): :data:`STANDARD`'s, in
+    its order, then the others sorted.  Every GP kernel dispatches these, whatever
+    a task's function set, so tasks and presets drawing on them share one kernel."""
+    load_builtin()
+    package = Path(importlib.import_module(_BUILTIN_PACKAGE).__file__).resolve().parent
+    found = {n for n, p in _REGISTRY.items() if Path(p.file).parent == package}
+    return tuple(n for n in STANDARD if n in found) + tuple(sorted(found - set(STANDARD)))
+
+
 def load_builtin() -> None:
     """Import every module of the installed ``gpmotion.primitives`` package."""
     import pkgutil

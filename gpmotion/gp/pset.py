@@ -29,7 +29,7 @@ from gpmotion.gp.subgoals import MAX_SUBGOALS
 class PsetInfo:
     """A DEAP primitive set plus what bytecode and interpreter need to agree on."""
     pset: gp.PrimitiveSet
-    primitive_names: tuple[str, ...]   # opcode 2 + k  <->  primitive_names[k]
+    primitive_names: tuple[str, ...]   # the function set (what trees are built from)
     terminal_names: tuple[str, ...]    # pset arguments, in order (senses, subgoal flags,
     #                                    task senses)
     sense_indices: tuple[int, ...]     # terminal k reads senses[i], i = sense_indices[k];
@@ -40,9 +40,18 @@ class PsetInfo:
     hash: str                          # primitive names + sources + terminals
     flag_names: tuple[str, ...] = ()   # subgoal terminals (after the senses)
     task_sense_names: tuple[str, ...] = ()   # task senses (the last ones; gp.task_senses)
+    # what the kernel dispatches: opcode OP_PRIM0 + k <-> opcode_names[k] (the installed
+    # primitives, then the set's others: one kernel for every set drawn from them)
+    opcode_names: tuple[str, ...] = ()
 
     @property
     def primitives(self) -> list[registry.Primitive]:
+        """The kernel's primitives, in opcode order (a superset of the function set)."""
+        return [registry.get(n) for n in self.opcode_names or self.primitive_names]
+
+    @property
+    def function_set(self) -> list[registry.Primitive]:
+        """The primitives trees are built from, in the set's order."""
         return [registry.get(n) for n in self.primitive_names]
 
 
@@ -113,8 +122,10 @@ def build_pset(terminal_names: Sequence[str], primitive_names: Sequence[str] | N
     func = _ERC_FUNCS.setdefault(erc_name, functools.partial(random.uniform, lo, hi))
     pset.addEphemeralConstant(erc_name, func)
     pset.renameArguments(**{f"ARG{i}": t for i, t in enumerate(terms)})
+    builtin = registry.builtin_names()
+    opcodes = builtin + tuple(n for n in prim_names if n not in builtin)
     return PsetInfo(pset, prim_names, terms, idx, erc_name, (lo, hi), h, tuple(flag_names),
-                    tuple(task_sense_names))
+                    tuple(task_sense_names), opcodes)
 
 
 def compile_reference(tree, info: PsetInfo) -> Callable:

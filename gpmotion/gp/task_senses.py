@@ -167,10 +167,11 @@ class _Parser:
         self._fail(f"expected a number, a sense or '(', found {value or 'the end'!r}", col)
 
 
-def compile_formula(tree, sense_names, primitive_names) -> tuple[list, list, int]:
+def compile_formula(tree, sense_names, opcode_names) -> tuple[list, list, int]:
     """A parsed formula -> (ops, constants, stack need), as gp.bytecode's
-    compile_tree gives for a tree (every primitive applied eagerly)."""
-    sense_names, prims = list(sense_names), list(primitive_names)
+    compile_tree gives for a tree (every primitive applied eagerly);
+    ``opcode_names``: the kernel's primitives in opcode order (PsetInfo.opcode_names)."""
+    sense_names, prims = list(sense_names), list(opcode_names)
     ops, consts = [], []
 
     def emit(node) -> int:

@@ -1,0 +1,105 @@
+"""Which generated kernels a command compiles or loads: the main job, the test suite, anything.
+
+    python benchmarks/kernel_count.py [--log FILE] -- COMMAND [ARG ...]
+    python benchmarks/kernel_count.py -- gpmotion run lamp_hop --generations 2
+    python benchmarks/kernel_count.py -- python -m pytest -q
+
+Runs COMMAND with a ``sitecustomize`` first on PYTHONPATH that logs every
+generated module gpmotion imports from its cache folder (every process the
+command starts and that inherits the environment: pytest-xdist workers,
+process pools, Dask workers on this machine), then prints the distinct ones
+by kind:
+
+* ``rollout``: rollout kernels (:mod:`gpmotion.sim.kernels`), each named by
+  its controller module and backend;
+* ``gp``: GP interpreters (:mod:`gpmotion.gp.interpreter`), by their
+  primitives (a fast-trig form is its own);
+* ``prim``: one-primitive modules :func:`gpmotion.check.check_primitive`
+  compiles to check a primitive file.
+
+The package's own numba functions (BSR kernels, the simulator's steps) are
+compiled into the rollout kernels that call them and are not counted apart.
+A cold cache compiles each module listed once (``GPMOTION_CACHE=$(mktemp -d)``
+makes one); a warm one loads it.  Exit status: the command's.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+HOOK = '''\
+# Written by benchmarks/kernel_count.py: log gpmotion's generated modules as they load.
+import importlib.util as _util, os as _os
+_spec = _util.spec_from_file_location
+def _logged(name, location=None, *args, **kwargs):
+    if str(name).startswith("gpmotion_cache_") and _os.environ.get("GPMOTION_KERNEL_LOG"):
+        with open(_os.environ["GPMOTION_KERNEL_LOG"], "a") as f:
+            f.write(str(location) + "\\n")
+    return _spec(name, location, *args, **kwargs)
+_util.spec_from_file_location = _logged
+'''
+
+
+def describe(path: Path) -> tuple[str, str]:
+    """(kind, what it is) of one generated module file."""
+    kind = path.name.split("_")[0]
+    text = path.read_text() if path.exists() else ""
+    if kind == "rollout":
+        ctrl = re.search(r"import_file\('([^']+)'\)", text)
+        backend = re.search(r"from gpmotion\.sim\.(\w+) import JIT", text)
+        name = Path(ctrl.group(1)).name if ctrl else "?"
+        if ctrl and name.startswith("gp_"):
+            name = "GP interpreter (" + describe(Path(ctrl.group(1)))[1] + ")"
+        return kind, f"{name} on {backend.group(1) if backend else '?'}"
+    if kind == "gp":
+        return kind, _primitives(path) + (" [fast trig]" if "_ft_sin" in text else "")
+    return kind, path.name
+
+
+def _primitives(path: Path) -> str:
+    m = re.search(r"^primitives: (.*)$", path.read_text(), re.M) if path.exists() else None
+    return m.group(1) if m else "?"
+
+
+def summary(log: Path) -> str:
+    # by file name (a hash of the source): a copy in another cache folder (a test's
+    # own, e.g. run with numba's JIT off) is the same kernel
+    found = {Path(line).name: Path(line) for line in log.read_text().split()} if log.exists() else {}
+    paths = [found[name] for name in sorted(found)]
+    kinds = Counter()
+    lines = []
+    for p in paths:
+        kind, what = describe(p)
+        kinds[kind] += 1
+        lines.append(f"  {kind:8} {what}")
+    head = ", ".join(f"{kinds[k]} {k}" for k in ("rollout", "gp", "prim") if kinds[k]) or "none"
+    return f"generated modules loaded: {head}\n" + "\n".join(sorted(lines))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--log", type=Path, help="keep the log of module paths here")
+    ap.add_argument("command", nargs=argparse.REMAINDER, help="-- COMMAND [ARG ...]")
+    args = ap.parse_args(argv)
+    cmd = args.command[1:] if args.command[:1] == ["--"] else args.command
+    if not cmd:
+        ap.error("give the command after --")
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, "sitecustomize.py").write_text(HOOK)
+        log = args.log or Path(tmp, "kernels.log")
+        log.unlink(missing_ok=True)
+        env = dict(os.environ, GPMOTION_KERNEL_LOG=str(log.resolve()),
+                   PYTHONPATH=os.pathsep.join(filter(None, [tmp, os.environ.get("PYTHONPATH")])))
+        rc = subprocess.call(cmd, env=env)
+        print(summary(log))
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""benchmarks/kernel_count.py: the generated kernels a command loads, in every process it starts."""
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+TOOL = ROOT / "benchmarks" / "kernel_count.py"
+
+
+def _count(code: str, tmp_path) -> str:
+    log = tmp_path / "kernels.log"
+    out = subprocess.run([sys.executable, str(TOOL), "--log", str(log), "--",
+                          sys.executable, "-c", textwrap.dedent(code)],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_two_function_sets_of_installed_primitives_load_one_interpreter(tmp_path):
+    out = _count("""
+        from gpmotion.gp.interpreter import load_interpreter
+        from gpmotion.gp.pset import build_pset
+        load_interpreter(build_pset(["x"], ["add", "sub"]))
+        load_interpreter(build_pset(["x"]))
+        load_interpreter(build_pset(["x"], ["ifpos", "mul"]))
+        """, tmp_path)
+    assert out.splitlines()[0] == "generated modules loaded: 1 gp", out
+    assert "ifpos" in out.splitlines()[1]
+
+
+def test_a_child_process_is_counted_and_the_exit_status_kept(tmp_path):
+    out = subprocess.run([sys.executable, str(TOOL), "--", sys.executable, "-c", textwrap.dedent("""
+        import subprocess, sys
+        subprocess.run([sys.executable, "-c", "from gpmotion.gp.interpreter import load_interpreter;"
+                        "from gpmotion.gp.pset import build_pset;"
+                        "load_interpreter(build_pset(['x']))"], check=True)
+        sys.exit(3)
+        """)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert out.returncode == 3
+    assert out.stdout.splitlines()[0] == "generated modules loaded: 1 gp", out.stdout
