@@ -14,23 +14,19 @@ forms alternately, best of ``--repeats``.  Both give the same values
 import argparse
 import dataclasses
 import random
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from deap import gp
-from numba import njit
 
 from gpmotion.gp.bytecode import STACK_CAP, encode_trees
 from gpmotion.gp.interpreter import interpreter_path, load_interpreter
 from gpmotion.gp.pset import build_pset
 
-
-@njit
-def drive(run_tree, ci, cf, senses, stack):
-    acc = 0.0
-    for s in range(senses.shape[0]):
-        acc += run_tree(ci, cf, 0, senses[s], stack)
-    return acc
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from gp_lazy_branches import drive  # noqa: E402  (benchmarks/gp_lazy_branches.py: one tree on every sense vector)
 
 
 def main(argv=None):
