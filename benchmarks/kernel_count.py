@@ -17,10 +17,13 @@ by kind:
 * ``prim``: one-primitive modules :func:`gpmotion.check.check_primitive`
   compiles to check a primitive file.
 
-The package's own numba functions (BSR kernels, the simulator's steps) are
-compiled into the rollout kernels that call them and are not counted apart.
-A cold cache compiles each module listed once (``GPMOTION_CACHE=$(mktemp -d)``
-makes one); a warm one loads it.  Exit status: the command's.
+A process started with an environment of its own (a test's fresh virtual
+environment, ``env={...}``) is not seen by the log; what any process wrote
+to this environment's cache folder is, so the files the command added there
+are listed too (on an empty cache, ``GPMOTION_CACHE=$(mktemp -d)``: every
+module it compiled).  The package's own numba functions (BSR kernels, the
+simulator's steps) are compiled into the rollout kernels that call them and
+are not counted apart.  Exit status: the command's.
 """
 from __future__ import annotations
 
@@ -71,7 +74,10 @@ def summary(log: Path) -> str:
     # by file name (a hash of the source): a copy in another cache folder (a test's
     # own, e.g. run with numba's JIT off) is the same kernel
     found = {Path(line).name: Path(line) for line in log.read_text().split()} if log.exists() else {}
-    paths = [found[name] for name in sorted(found)]
+    return listing("generated modules loaded", [found[name] for name in sorted(found)])
+
+
+def listing(title: str, paths: list[Path]) -> str:
     kinds = Counter()
     lines = []
     for p in paths:
@@ -79,7 +85,14 @@ def summary(log: Path) -> str:
         kinds[kind] += 1
         lines.append(f"  {kind:8} {what}")
     head = ", ".join(f"{kinds[k]} {k}" for k in ("rollout", "gp", "prim") if kinds[k]) or "none"
-    return f"generated modules loaded: {head}\n" + "\n".join(sorted(lines))
+    return "\n".join([f"{title}: {head}"] + sorted(lines))
+
+
+def cache_files() -> set[Path]:
+    """The generated modules in this environment's cache folder."""
+    from gpmotion.cache import machine_dir
+    folder = machine_dir() / "kernels"
+    return set(folder.glob("*.py")) if folder.is_dir() else set()
 
 
 def main(argv=None) -> int:
@@ -96,8 +109,10 @@ def main(argv=None) -> int:
         log.unlink(missing_ok=True)
         env = dict(os.environ, GPMOTION_KERNEL_LOG=str(log.resolve()),
                    PYTHONPATH=os.pathsep.join(filter(None, [tmp, os.environ.get("PYTHONPATH")])))
+        before = cache_files()
         rc = subprocess.call(cmd, env=env)
         print(summary(log))
+        print(listing("added to the cache folder", sorted(cache_files() - before)))
     return rc
 
 

@@ -27,6 +27,18 @@ def test_two_function_sets_of_installed_primitives_load_one_interpreter(tmp_path
         """, tmp_path)
     assert out.splitlines()[0] == "generated modules loaded: 1 gp", out
     assert "ifpos" in out.splitlines()[1]
+    assert out.splitlines()[2].startswith("added to the cache folder: ")
+
+
+def test_on_an_empty_cache_what_a_command_compiles_is_listed(tmp_path, monkeypatch):
+    monkeypatch.setenv("GPMOTION_CACHE", str(tmp_path / "cache"))
+    out = _count("""
+        from gpmotion.gp.interpreter import load_interpreter
+        from gpmotion.gp.pset import build_pset
+        load_interpreter(build_pset(["x"], ["add"]))
+        """, tmp_path)
+    assert out.splitlines()[2:] == ["added to the cache folder: 1 gp",
+                                    "  gp       abs, add, cos, div, iflte, mul, sin, sub, ifpos"], out
 
 
 def test_a_child_process_is_counted_and_the_exit_status_kept(tmp_path):
