@@ -21,8 +21,18 @@ def test_generated_kernel_is_the_episode_module_but_for_two_imports(name):
     changed = [line for line in real if line not in src]
     marked = [l for l in real if l.rstrip().endswith((kernels.MARK, kernels.BACKEND_MARK))]
     assert changed == marked and len(marked) == 2                               # just those lines
-    assert f"_controller = import_file({str(Path(schedule.KERNEL).resolve())!r})" in src
+    assert "import gpmotion.controllers.schedule_kernel as _controller" in src
     assert any(l.startswith(f"from {backend.BACKENDS[name].__name__} import ") for l in src)
+
+
+def test_a_package_controllers_kernel_names_no_folder_of_the_install(tmp_path):
+    """The same source wherever gpmotion lives: a second checkout finds the kernels
+    the first compiled; a controller module outside the package is named by path."""
+    root = str(Path(kernels.__file__).resolve().parents[2])
+    assert root not in kernels.episode_source(schedule.KERNEL, "planar")
+    ctrl = tmp_path / "my_controller.py"
+    ctrl.write_text(Path(schedule.KERNEL).read_text())
+    assert f"import_file({str(ctrl.resolve())!r})" in kernels.episode_source(str(ctrl), "planar")
 
 
 def test_kernels_differ_per_backend():
