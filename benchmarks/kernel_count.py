@@ -54,9 +54,11 @@ def describe(path: Path) -> tuple[str, str]:
     kind = path.name.split("_")[0]
     text = path.read_text() if path.exists() else ""
     if kind == "rollout":
+        # the controller: a file by path (a generated GP interpreter), or a package module by name
         ctrl = re.search(r"import_file\('([^']+)'\)", text)
+        by_name = re.search(r"^import gpmotion\.[\w.]*?(\w+) as _controller$", text, re.M)
         backend = re.search(r"from gpmotion\.sim\.(\w+) import JIT", text)
-        name = Path(ctrl.group(1)).name if ctrl else "?"
+        name = Path(ctrl.group(1)).name if ctrl else f"{by_name.group(1)}.py" if by_name else "?"
         if ctrl and name.startswith("gp_"):
             name = "GP interpreter (" + describe(Path(ctrl.group(1)))[1] + ")"
         return kind, f"{name} on {backend.group(1) if backend else '?'}"

@@ -20,8 +20,8 @@ from deap import gp
 
 from gpmotion.gp import primitives as registry
 from gpmotion.gp.bytecode import (HEADER, MAX_TREE_DEPTH, OP_JUMP, OP_PRIM0, RATE_STATE,
-                                  STACK_CAP, TargetLaw, compile_tree, encode_batch, encode_trees, tokens_to_tree,
-                                  tree_to_tokens)
+                                  STACK_CAP, TargetLaw, compile_tree, encode_batch, encode_trees,
+                                  tokens_to_tree, tree_to_tokens)
 from gpmotion.gp.interpreter import interpreter_path, interpreter_source, load_interpreter
 from gpmotion.gp.primitives import STANDARD
 from gpmotion.gp.pset import build_pset, compile_reference

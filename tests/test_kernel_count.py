@@ -6,6 +6,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 TOOL = ROOT / "benchmarks" / "kernel_count.py"
+sys.path.insert(0, str(TOOL.parent))
+import kernel_count  # noqa: E402
 
 
 def _count(code: str, tmp_path) -> str:
@@ -51,3 +53,16 @@ def test_a_child_process_is_counted_and_the_exit_status_kept(tmp_path):
         """)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert out.returncode == 3
     assert out.stdout.splitlines()[0] == "generated modules loaded: 1 gp", out.stdout
+
+
+def test_a_rollout_kernel_is_named_by_its_controller_and_backend(tmp_path):
+    from gpmotion.controllers import schedule
+    from gpmotion.sim.kernels import episode_source
+    package = tmp_path / "rollout_package.py"
+    package.write_text(episode_source(schedule.KERNEL, "planar"))
+    assert kernel_count.describe(package) == ("rollout", "schedule_kernel.py on backend_planar")
+    own = tmp_path / "my_controller.py"
+    own.write_text(Path(schedule.KERNEL).read_text())
+    outside = tmp_path / "rollout_outside.py"
+    outside.write_text(episode_source(str(own), "3d"))
+    assert kernel_count.describe(outside) == ("rollout", "my_controller.py on backend_3d")
