@@ -83,11 +83,11 @@ class _Compiles(event.Listener):
 
 
 class KernelMeter:
-    """Wraps every rollout kernel: time inside it, simulated steps, kernels seen."""
+    """Wraps every rollout batch: time inside the kernel, simulated steps, kernels seen."""
 
     def __init__(self):
         self.seconds, self.steps, self.kernels = 0.0, 0, set()
-        self._orig = rollout_module.kernel_for
+        self._run_batch = rollout_module.run_batch
         self._compiles = _Compiles()
 
     @property
@@ -97,24 +97,22 @@ class KernelMeter:
     def __enter__(self):
         event.register("numba:compile", self._compiles)
         meter = self
+        run_batch = self._run_batch
 
-        class Timed:
-            def __init__(self, kernel):
-                self.kernel = kernel
+        def timed(kernel, args, n, threads=None):
+            t0 = time.perf_counter()
+            run_batch(kernel, args, n, threads)
+            meter.seconds += time.perf_counter() - t0
+            start, out = args[4], args[6]
+            div = out.status[:, 0] == 1
+            meter.steps += int(np.where(div, out.status[:, 1] + 1, start.n_steps).sum())
+            meter.kernels.add(kernel.__file__)
 
-            def rollout_batch(self, M, S, goal, st, start, prog, out):
-                t0 = time.perf_counter()
-                self.kernel.rollout_batch(M, S, goal, st, start, prog, out)
-                meter.seconds += time.perf_counter() - t0
-                div = out.status[:, 0] == 1
-                meter.steps += int(np.where(div, out.status[:, 1] + 1, start.n_steps).sum())
-                meter.kernels.add(self.kernel.__file__)
-
-        rollout_module.kernel_for = lambda module, backend: Timed(self._orig(module, backend))
+        rollout_module.run_batch = timed
         return self
 
     def __exit__(self, *exc):
-        rollout_module.kernel_for = self._orig
+        rollout_module.run_batch = self._run_batch
         event.unregister("numba:compile", self._compiles)
 
 

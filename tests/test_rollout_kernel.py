@@ -197,3 +197,57 @@ def test_a_gp_rollout_does_not_depend_on_which_kernel_compiled_its_module_first(
         runs.append(subprocess.run([sys.executable, "-c", _ORDER_SCRIPT, *order], env=env,
                                    check=True, capture_output=True, text=True).stdout)
     assert runs[0] == runs[1]
+
+
+class _Spy:
+    """A rollout kernel that records which thread ran which chunk of episodes."""
+
+    def __init__(self, kernel, fail_at=None):
+        self.kernel, self.fail_at, self.chunks = kernel, fail_at, []
+
+    def rollout_batch(self, *args):
+        import threading
+        lo, hi = args[-2:]
+        if self.fail_at is not None and lo <= self.fail_at < hi:
+            raise RuntimeError(f"chunk {lo}-{hi}")
+        self.chunks.append((lo, hi, threading.get_ident()))
+        self.kernel.rollout_batch(*args)
+
+
+def _varied_lamp_batch(n):
+    fig = load_figure("lamp")
+    rng = np.random.default_rng(3)
+    amp = rng.uniform(0.0, 1.5, (n, fig.n_act))          # some fall, some hop, some hold
+    return fig, schedule.sines(np.tile(fig.model.neutral, (n, 1)), amp, rng.uniform(2, 12, (n, fig.n_act)), 0.0)
+
+
+def test_threads_share_a_batch_out_and_give_one_threads_results(monkeypatch):
+    """Chunks cover every episode once, more than one thread runs them, and each
+    episode's channels are those of the same batch on one thread, bit for bit."""
+    from gpmotion.model import make_scene
+    from gpmotion.sim import rollout as rollout_module
+    fig, ctrl = _varied_lamp_batch(13)
+    serial = rollout_module.rollout(fig, make_scene(), ctrl, n_steps=2000, threads=1)
+    monkeypatch.setattr(rollout_module, "default_threads", lambda: 3)   # not capped by this machine
+    real = rollout_module.kernel_for
+    spies = []
+    monkeypatch.setattr(rollout_module, "kernel_for",
+                        lambda *a: spies.append(_Spy(real(*a))) or spies[-1])
+    threaded = rollout_module.rollout(fig, make_scene(), ctrl, n_steps=2000, threads=3)
+    chunks = sorted(c for c in spies[0].chunks if c[0] < c[1])
+    assert [c[:2] for c in chunks] == list(zip(range(0, 13, 2), [*range(2, 13, 2), 13]))
+    assert len({c[2] for c in chunks}) > 1
+    for name in ("q", "qd", "com", "contact_force", "pole_hit", "impact", "energy", "targets",
+                 "diverged", "diverged_step", "contact_end"):
+        assert np.array_equal(getattr(serial, name), getattr(threaded, name)), name
+
+
+def test_a_chunks_error_reaches_the_caller(monkeypatch):
+    from gpmotion.model import make_scene
+    from gpmotion.sim import rollout as rollout_module
+    fig, ctrl = _varied_lamp_batch(6)
+    monkeypatch.setattr(rollout_module, "default_threads", lambda: 2)
+    real = rollout_module.kernel_for
+    monkeypatch.setattr(rollout_module, "kernel_for", lambda *a: _Spy(real(*a), fail_at=4))
+    with pytest.raises(RuntimeError, match="chunk 4-5"):
+        rollout_module.rollout(fig, make_scene(), ctrl, n_steps=50, threads=2)

@@ -34,7 +34,8 @@ def _add_run_args(p):
     p.add_argument("--resume", action="store_true", help="continue an existing run directory")
     p.add_argument("--workers", type=int, default=0, help="process-pool workers (default: in-process)")
     p.add_argument("--scheduler", help="Dask scheduler: 'local' or tcp://HOST:PORT")
-    p.add_argument("--threads", type=int, help="numba threads in this process")
+    p.add_argument("--threads", type=int,
+                   help="rollout threads in this process (default: NUMBA_NUM_THREADS, the cores)")
     _add_plugins_arg(p)
     _add_tls_args(p)
     p.add_argument("--quiet", action="store_true", help="no per-generation progress")

@@ -16,7 +16,7 @@ the ``schedule`` controller runs.  The controller contract is in
 :mod:`gpmotion.sim.kernel_io`.
 """
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from gpmotion.sim.borrow import borrowed, hold
 from gpmotion.sim.backend import JIT, advance, observe, save_contact, store_object, workspace  # backend
@@ -119,10 +119,11 @@ def run_episode(M, S, goal, st, e, start, prog, out):
 _run_episode = njit(**JIT)(run_episode)
 
 
-@njit(cache=True, parallel=True)
-def rollout_batch(M, S, goal, st, start, prog, out):
-    """Every episode of the batch, in parallel (numba threads)."""
-    for i in prange(start.q0.shape[0]):
-        # int64: numba types a prange index int64 when it types this function and
-        # uint64 inside the parallel body, so a bare index compiled the episode twice
-        _run_episode(M, S, goal, st, np.int64(i), start, prog, out)
+@njit(cache=True, nogil=True)
+def rollout_batch(M, S, goal, st, start, prog, out, lo, hi):
+    """Episodes ``lo`` to ``hi`` - 1 of the batch, without the GIL: the threads of
+    :func:`gpmotion.sim.rollout.run_batch` share a batch out, and an episode writes
+    only its own rows.  (Threads from Python, not a numba ``prange``: the parallel
+    wrapper adds a sixth to a kernel's cold compile.)"""
+    for i in range(lo, hi):
+        _run_episode(M, S, goal, st, i, start, prog, out)

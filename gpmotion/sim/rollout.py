@@ -1,4 +1,4 @@
-"""Batched rollout: many episodes in parallel (numba prange) → a Trajectory.
+"""Batched rollout: many episodes in parallel (threads) → a Trajectory.
 
 The kernel is the one episode loop (gpmotion.sim.episode) generated per
 controller kernel module (so the controller's ``control`` is inlined into
@@ -8,6 +8,8 @@ the physics and the geometry of recorded frames.
 """
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numba
@@ -234,13 +236,7 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
                       np.zeros((E, max(1, controller.cstate_size))))
     out = Outputs.zeros(E, F, nq, nv, backend.COM_WIDTH, nc, na, ns, record_senses, has_obj)
     kernel = kernel_for(controller.module, backend.NAME)
-    old_threads = numba.get_num_threads()
-    if threads:
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    try:
-        kernel.rollout_batch(m, scene, backend.goal(scene), settings, start, program, out)
-    finally:
-        numba.set_num_threads(old_threads)
+    run_batch(kernel, (m, scene, backend.goal(scene), settings, start, program, out), E, threads)
     channels = out._asdict()
     status, senses, obj = channels.pop("status"), channels.pop("senses"), channels.pop("obj")
     return Trajectory(figure=figure, scene=scene, dt=dt, record_every=record_every,
@@ -248,6 +244,47 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
                       senses=senses if record_senses else None,
                       diverged=status[:, 0].astype(bool), diverged_step=status[:, 1],
                       contact_end=start.contact, obj=obj if has_obj else None, **channels)
+
+
+CHUNKS_PER_THREAD = 4      # a batch's share-out: chunks handed to threads as they free up
+
+_POOL: dict = {}
+
+
+def default_threads() -> int:
+    """Threads a rollout uses unless told: ``NUMBA_NUM_THREADS`` (the cores)."""
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def run_batch(kernel, args: tuple, n: int, threads: int | None = None) -> None:
+    """Episodes 0..n-1 of a rollout kernel's batch on ``threads`` threads.
+
+    The kernel releases the GIL and each episode writes only its own rows, so
+    threads split a batch in chunks, handed out as threads free up (an episode
+    that ends early never leaves a thread idle); an episode's result does not
+    depend on the thread that ran it."""
+    threads = min(threads or default_threads(), default_threads(), n)
+    if not getattr(kernel.rollout_batch, "signatures", True):    # compile or load it once, here
+        kernel.rollout_batch(*args, 0, 0)
+    if threads <= 1:
+        kernel.rollout_batch(*args, 0, n)
+        return
+    size = -(-n // (threads * CHUNKS_PER_THREAD))
+    pool = _thread_pool(threads)
+    jobs = [pool.submit(kernel.rollout_batch, *args, lo, min(n, lo + size))
+            for lo in range(0, n, size)]
+    for job in jobs:           # every chunk finished before the outputs are read
+        job.exception()
+    for job in jobs:
+        job.result()
+
+
+def _thread_pool(threads: int) -> ThreadPoolExecutor:
+    """One pool per thread count and process (a forked child starts its own)."""
+    key = (os.getpid(), threads)
+    if key not in _POOL:
+        _POOL[key] = ThreadPoolExecutor(threads, thread_name_prefix="gpmotion-rollout")
+    return _POOL[key]
 
 
 def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,
