@@ -15,9 +15,15 @@ module's source, and the note's machinery must not recompile every kernel.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:            # pragma: no cover - not POSIX: processes compile side by side
+    fcntl = None
 
 from . import cache
 
@@ -92,3 +98,29 @@ def record_compile_seconds(kind: str, seconds: float) -> None:
         os.replace(tmp, path)
     except OSError:
         pass
+
+
+@contextlib.contextmanager
+def compile_lock(module_path):
+    """One process at a time compiles or loads the kernel module at ``module_path``.
+
+    Processes that start together on a cold cache (a process pool's workers, a
+    study's) would each compile the same kernel, a minute of CPU and half a
+    gigabyte each; with the lock one compiles and the others wait, then load
+    what it cached.  An exclusive ``flock`` on ``<module>.lock`` beside it,
+    released when its holder ends, however it ends; a folder where it cannot
+    be taken only loses the wait, never the compile."""
+    fd = None
+    if fcntl is not None:
+        try:
+            fd = os.open(Path(module_path).with_suffix(".lock"), os.O_RDWR | os.O_CREAT, 0o666)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            if fd is not None:
+                os.close(fd)
+            fd = None
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)

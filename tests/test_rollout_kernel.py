@@ -251,3 +251,27 @@ def test_a_chunks_error_reaches_the_caller(monkeypatch):
     monkeypatch.setattr(rollout_module, "kernel_for", lambda *a: _Spy(real(*a), fail_at=4))
     with pytest.raises(RuntimeError, match="chunk 4-5"):
         rollout_module.rollout(fig, make_scene(), ctrl, n_steps=50, threads=2)
+
+
+def test_one_process_at_a_time_compiles_a_kernel(tmp_path):
+    """The compile lock excludes other processes: another process that takes it
+    after us gets it only once we let go (then it loads what we cached)."""
+    import subprocess
+    import textwrap
+    from gpmotion.compile_events import compile_lock
+    module, log = tmp_path / "rollout_x.py", tmp_path / "log"
+    child = textwrap.dedent(f"""
+        from gpmotion.compile_events import compile_lock
+        with compile_lock({str(module)!r}):
+            open({str(log)!r}, "a").write("child\\n")
+    """)
+    with compile_lock(module):
+        proc = subprocess.Popen([sys.executable, "-c", child])
+        try:
+            proc.wait(timeout=3)
+        except subprocess.TimeoutExpired:       # blocked on our lock, as it should be
+            pass
+        log.write_text("parent\n")              # only we hold it: the child has not written
+    assert proc.wait(timeout=60) == 0
+    assert log.read_text() == "parent\nchild\n"
+    assert (tmp_path / "rollout_x.lock").exists()

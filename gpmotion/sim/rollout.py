@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numba
 import numpy as np
 
+from ..compile_events import compile_lock
 from ..controllers import ControllerBatch
 from ..model import KINEMATIC, PD, Figure, Scene, make_scene
 from .backend import backend_of
@@ -265,7 +266,8 @@ def run_batch(kernel, args: tuple, n: int, threads: int | None = None) -> None:
     depend on the thread that ran it."""
     threads = min(threads or default_threads(), default_threads(), n)
     if not getattr(kernel.rollout_batch, "signatures", True):    # compile or load it once, here
-        kernel.rollout_batch(*args, 0, 0)
+        with compile_lock(kernel.__file__):
+            kernel.rollout_batch(*args, 0, 0)
     if threads <= 1:
         kernel.rollout_batch(*args, 0, n)
         return
