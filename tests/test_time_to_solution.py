@@ -1,0 +1,20 @@
+"""benchmarks/time_to_solution.py: the work of a run, counted from the rollouts it makes."""
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import time_to_solution  # noqa: E402
+
+
+def test_a_runs_steps_time_in_the_kernel_and_kernels_are_counted():
+    """Every evaluation and the replay of the best are counted (3,000 steps each,
+    fewer for one that diverged), on two threads as on one; one kernel."""
+    rows = [time_to_solution.one_run("lamp_hop", 0, {"generations": 2, "population": 10},
+                                     threads, artifacts=False) for threads in (1, 2)]
+    for r in rows:
+        assert r["generations"] == 2 and r["kernels"] == 1
+        assert 0 < r["steps"] <= (r["evals"] + 1) * 3000
+        assert r["steps"] > r["evals"] * 3000 * 0.9        # diverged episodes are rare
+        assert 0 < r["outside"] < 1 and r["finish_s"] >= 0
+    assert rows[0]["steps"] == rows[1]["steps"] and rows[0]["cost"] == rows[1]["cost"]
