@@ -204,7 +204,8 @@ def lamp_bound(task, traj, progress):
 def jit_signatures() -> int:
     """Compiled signatures of every numba dispatcher alive in this process."""
     from numba.core.registry import CPUDispatcher
-    return sum(len(d.overloads) for d in gc.get_objects() if isinstance(d, CPUDispatcher))
+    # type(), not isinstance(): a weak proxy to a dead object raises on __class__
+    return sum(len(d.overloads) for d in gc.get_objects() if issubclass(type(d), CPUDispatcher))
 
 
 def _timed_finish(spent: list):

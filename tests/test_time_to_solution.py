@@ -18,3 +18,17 @@ def test_a_runs_steps_time_in_the_kernel_and_kernels_are_counted():
         assert r["steps"] > r["evals"] * 3000 * 0.9        # diverged episodes are rare
         assert 0 < r["outside"] < 1 and r["finish_s"] >= 0
     assert rows[0]["steps"] == rows[1]["steps"] and rows[0]["cost"] == rows[1]["cost"]
+
+
+def test_counting_signatures_survives_a_dead_weak_proxy():
+    """A process that ran other code holds weak proxies to dead objects; the
+    count must step over them (isinstance on one raises ReferenceError)."""
+    import weakref
+
+    class Gone:
+        pass
+    obj = Gone()
+    proxy = weakref.proxy(obj)
+    del obj
+    assert time_to_solution.jit_signatures() >= 0
+    assert proxy is not None
