@@ -167,9 +167,9 @@ def _limit_threads():
     """One compute thread per worker process: the parallelism is the processes.
 
     The spawned child imported numba (through gpmotion) before any initializer
-    ran, so the environment alone is too late for numba's pool size: reload the
-    config and, if the thread pool is not launched yet, shrink it to one thread.
-    ``threads=1`` on every chunk is the backstop if the pool was launched.
+    ran, so the environment alone is too late: reload numba's config, which
+    :func:`gpmotion.sim.threads.default_threads` reads, and shrink numba's own
+    pool if it is not launched yet.  ``threads=1`` on every chunk is the backstop.
     """
     os.environ.update(_WORKER_ENV)
     try:
@@ -224,7 +224,7 @@ def _init_worker(spec: dict, parent_pid: int | None = None, kernel_signal: bool 
 
 def _run_chunk(spec: dict, genomes_json: list, progress: float, generation: int = 0):
     """Evaluate one chunk in a worker; returns (Evaluation, seconds of work)."""
-    with _CHUNK_LOCK:          # numba's threading layers are not re-entrant across threads
+    with _CHUNK_LOCK:          # one chunk at a time per worker: its one compute thread
         t0 = time.perf_counter()
         result = evaluate_chunk(spec, genomes_json, progress, threads=1, generation=generation)
         return result, time.perf_counter() - t0

@@ -611,6 +611,18 @@ def test_trajectory_sites_and_segments_share_one_pass_and_equal_separate_ones(ma
     assert tr.sites().shape == tr.q.shape[:2] + (len(fig.site_link), 3)
 
 
+def test_compiled_points_split_over_threads_are_one_threads(monkeypatch):
+    """The frames of ``points_fast`` split over threads (chunks of a nogil kernel)
+    give the points of one thread, bit for bit."""
+    from gpmotion.sim import geometry3d, threads
+    fig, tr = rollout(humanoid3d(), 0.05)
+    m = fig.model
+    monkeypatch.setattr(threads, "default_threads", lambda: 1)
+    one = geometry3d.points_fast(m, tr.q, m.seg_link, m.seg_a)
+    monkeypatch.setattr(threads, "default_threads", lambda: 3)     # not capped by this machine
+    assert np.array_equal(geometry3d.points_fast(m, tr.q, m.seg_link, m.seg_a), one)
+
+
 @pytest.mark.parametrize("make", [humanoid3d, star3d, chain3d, _gizmo, lambda: "herman"])
 def test_compiled_points_match_the_numpy_kinematics(make):
     """``points_fast`` (numba, what a Trajectory's sites and segments use) is

@@ -11,6 +11,7 @@ from gpmotion import cache
 from gpmotion.controllers import schedule
 from gpmotion.figures import load_figure
 from gpmotion.sim import backend, episode, kernels
+from gpmotion.sim import threads as threads_module
 from gpmotion.sim.rollout import simulate
 
 
@@ -228,7 +229,7 @@ def test_threads_share_a_batch_out_and_give_one_threads_results(monkeypatch):
     from gpmotion.sim import rollout as rollout_module
     fig, ctrl = _varied_lamp_batch(13)
     serial = rollout_module.rollout(fig, make_scene(), ctrl, n_steps=2000, threads=1)
-    monkeypatch.setattr(rollout_module, "default_threads", lambda: 3)   # not capped by this machine
+    monkeypatch.setattr(threads_module, "default_threads", lambda: 3)   # not capped by this machine
     real = rollout_module.kernel_for
     spies = []
     monkeypatch.setattr(rollout_module, "kernel_for",
@@ -246,7 +247,7 @@ def test_a_chunks_error_reaches_the_caller(monkeypatch):
     from gpmotion.model import make_scene
     from gpmotion.sim import rollout as rollout_module
     fig, ctrl = _varied_lamp_batch(6)
-    monkeypatch.setattr(rollout_module, "default_threads", lambda: 2)
+    monkeypatch.setattr(threads_module, "default_threads", lambda: 2)
     real = rollout_module.kernel_for
     monkeypatch.setattr(rollout_module, "kernel_for", lambda *a: _Spy(real(*a), fail_at=4))
     with pytest.raises(RuntimeError, match="chunk 4-5"):

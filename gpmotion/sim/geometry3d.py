@@ -12,6 +12,7 @@ import numpy as np
 from ..model import FREE3D, HINGE3D
 from .rotations import axis_angle, quat_to_rot, rot_to_quat  # noqa: F401 (quat_to_rot: re-exported)
 from .spatial3d import fixed_point_world, kinematics, point_world
+from .threads import run_chunks
 
 
 def link_frames(model, q: np.ndarray):
@@ -47,7 +48,7 @@ def points_fast(model, q: np.ndarray, links, local) -> np.ndarray:
     """World (x, y, z) [..., n, 3] of link-frame points ``local[n, 3]`` on
     ``links[n]`` (−1: the fixed root body) for configurations ``q[..., nq]``.
 
-    Compiled (numba, parallel over frames) because the scores of a 3-D task
+    Compiled (numba, frames split over threads) because the scores of a 3-D task
     ask for every recorded frame of every episode, and the numpy loop over
     links cost more than the rollout itself; it runs the simulator's own
     ``kinematics`` pass and stores only the points, not every link frame.
@@ -61,14 +62,14 @@ def points_fast(model, q: np.ndarray, links, local) -> np.ndarray:
     links = np.ascontiguousarray(links, dtype=np.int64)
     local = np.ascontiguousarray(np.asarray(local, dtype=np.float64).reshape(-1, 3))
     out = np.empty((flat.shape[0], len(links), 3))
-    _points_kernel(model, flat, links, local, out)
+    run_chunks(_points_kernel, (model, flat, links, local, out), flat.shape[0])
     return out.reshape(q.shape[:-1] + (len(links), 3))
 
 
-@nb.njit(cache=True, parallel=True)
-def _points_kernel(M, q, links, local, out):
+@nb.njit(cache=True, nogil=True)
+def _points_kernel(M, q, links, local, out, lo, hi):
     nl, nv = M.parent.shape[0], M.lo.shape[0]
-    for s in nb.prange(q.shape[0]):
+    for s in range(lo, hi):
         R, pos, E = np.empty((nl, 3, 3)), np.empty((nl, 3)), np.empty((nl, 3, 3))
         r, v, cbias = np.empty((nl, 3)), np.empty((nl, 6)), np.empty((nl, 6))
         kinematics(M, q[s], np.zeros(nv), R, pos, E, r, v, cbias)

@@ -8,11 +8,8 @@ the physics and the geometry of recorded frames.
 """
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
-import numba
 import numpy as np
 
 from ..compile_events import compile_lock
@@ -22,6 +19,7 @@ from .backend import backend_of
 from .kernel_io import Outputs, Program, Settings, Start
 from .grip3d import O_LINK
 from .kernels import kernel_for
+from .threads import run_chunks
 
 DIVERGE_LIMIT = 1e4        # |q| or |q̇| beyond this ends the episode as diverged
 ACTUATION = {"pd": PD, "kinematic": KINEMATIC}
@@ -247,46 +245,16 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
                       contact_end=start.contact, obj=obj if has_obj else None, **channels)
 
 
-CHUNKS_PER_THREAD = 4      # a batch's share-out: chunks handed to threads as they free up
-
-_POOL: dict = {}
-
-
-def default_threads() -> int:
-    """Threads a rollout uses unless told: ``NUMBA_NUM_THREADS`` (the cores)."""
-    return max(1, int(numba.config.NUMBA_NUM_THREADS))
-
-
 def run_batch(kernel, args: tuple, n: int, threads: int | None = None) -> None:
-    """Episodes 0..n-1 of a rollout kernel's batch on ``threads`` threads.
-
-    The kernel releases the GIL and each episode writes only its own rows, so
-    threads split a batch in chunks, handed out as threads free up (an episode
-    that ends early never leaves a thread idle); an episode's result does not
-    depend on the thread that ran it."""
-    threads = min(threads or default_threads(), default_threads(), n)
-    if not getattr(kernel.rollout_batch, "signatures", True):    # compile or load it once, here
+    """Episodes 0..n-1 of a rollout kernel's batch on ``threads`` threads
+    (:func:`gpmotion.sim.threads.run_chunks`): the kernel releases the GIL and
+    an episode writes only its own rows, so its result does not depend on the
+    thread that ran it.  The kernel is compiled or loaded first, here, under
+    the compile lock."""
+    if not getattr(kernel.rollout_batch, "signatures", True):
         with compile_lock(kernel.__file__):
             kernel.rollout_batch(*args, 0, 0)
-    if threads <= 1:
-        kernel.rollout_batch(*args, 0, n)
-        return
-    size = -(-n // (threads * CHUNKS_PER_THREAD))
-    pool = _thread_pool(threads)
-    jobs = [pool.submit(kernel.rollout_batch, *args, lo, min(n, lo + size))
-            for lo in range(0, n, size)]
-    for job in jobs:           # every chunk finished before the outputs are read
-        job.exception()
-    for job in jobs:
-        job.result()
-
-
-def _thread_pool(threads: int) -> ThreadPoolExecutor:
-    """One pool per thread count and process (a forked child starts its own)."""
-    key = (os.getpid(), threads)
-    if key not in _POOL:
-        _POOL[key] = ThreadPoolExecutor(threads, thread_name_prefix="gpmotion-rollout")
-    return _POOL[key]
+    run_chunks(kernel.rollout_batch, args, n, threads)
 
 
 def simulate(figure: Figure, seconds: float = 2.0, *, targets=None, scene: Scene | None = None,
