@@ -69,10 +69,11 @@ def points_fast(model, q: np.ndarray, links, local) -> np.ndarray:
 @nb.njit(cache=True, nogil=True)
 def _points_kernel(M, q, links, local, out, lo, hi):
     nl, nv = M.parent.shape[0], M.lo.shape[0]
-    for s in range(lo, hi):
-        R, pos, E = np.empty((nl, 3, 3)), np.empty((nl, 3)), np.empty((nl, 3, 3))
-        r, v, cbias = np.empty((nl, 3)), np.empty((nl, 6)), np.empty((nl, 6))
-        kinematics(M, q[s], np.zeros(nv), R, pos, E, r, v, cbias)
+    R, pos, E = np.empty((nl, 3, 3)), np.empty((nl, 3)), np.empty((nl, 3, 3))
+    r, v, cbias = np.empty((nl, 3)), np.empty((nl, 6)), np.empty((nl, 6))
+    qd = np.zeros(nv)
+    for s in range(lo, hi):          # scratch reused across frames, as the rollout reuses it across steps
+        kinematics(M, q[s], qd, R, pos, E, r, v, cbias)
         for k in range(links.shape[0]):
             px, py, pz = local[k, 0], local[k, 1], local[k, 2]
             if links[k] >= 0:
