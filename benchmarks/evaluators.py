@@ -5,7 +5,7 @@
     python benchmarks/evaluators.py --json out.json
 
 Measures on this machine:
-  * evaluations/s: in-process (numba threads; and one thread), process pool
+  * evaluations/s: in-process (rollout threads; and one thread), process pool
     (``--workers``), Dask LocalCluster (``--workers``), same genomes, results
     checked bitwise equal;
   * per-task overhead of each backend (Dask: the TLS local cluster gpmotion
@@ -128,7 +128,7 @@ def main(argv=None):
            "cpus": os.cpu_count(), "load_average": list(os.getloadavg()), "python": platform.python_version(),
            "backends": {}}
 
-    # in-process: all numba threads, and one thread (t_e for the model)
+    # in-process: all rollout threads, and one thread (t_e for the model)
     ev = InProcessEvaluator(task, fam)
     ev.evaluate(pop[:8])                                            # compile / load the cache
     sec, ref = _best_time(lambda: ev.evaluate(pop), args.repeats)

@@ -27,7 +27,7 @@ Reported (one JSON object with ``--json``):
 * ``steps_per_s`` — controlled simulation steps per second on ONE thread
   (best of ``repeats`` timed runs after a warm-up compile);
 * ``steps_per_s_all_threads`` and ``threads`` — the same batch on every
-  numba thread;
+  rollout thread;
 * ``warm_start_s`` — wall time of a fresh ``python`` process that imports
   gpmotion and runs a tiny rollout with the kernel cache warm (interpreter
   start-up included; ``warm_start_inner_s`` excludes it);

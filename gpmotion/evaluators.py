@@ -321,7 +321,7 @@ class _ChunkedEvaluator:
 # ---- process pool ------------------------------------------------------------------
 
 class ProcessPoolEvaluator(_ChunkedEvaluator):
-    """Chunks of a batch on a pool of spawned worker processes, one numba thread each.
+    """Chunks of a batch on a pool of spawned worker processes, one compute thread each.
 
     The pool is started lazily on the first :meth:`evaluate` and kept for the
     following ones.  If a worker dies, the pool is rebuilt and the chunks that

@@ -304,7 +304,7 @@ def _job(job: Job):
 def _finished(todo: list[Job], workers: int):
     """Rows as each job finishes: in this process for one worker (so Ctrl-C and
     SIGTERM reach the run loop, which checkpoints), else from spawned processes
-    with one numba thread each."""
+    with one compute thread each."""
     if workers <= 1 or len(todo) <= 1:
         yield from map(_job, todo)
         return
