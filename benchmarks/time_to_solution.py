@@ -103,7 +103,7 @@ class KernelMeter:
             t0 = time.perf_counter()
             run_batch(kernel, args, n, threads)
             meter.seconds += time.perf_counter() - t0
-            start, out = args[4], args[6]
+            start, out = args[4], args[6]      # args: (M, S, goal, st, start, prog, out)
             div = out.status[:, 0] == 1
             meter.steps += int(np.where(div, out.status[:, 1] + 1, start.n_steps).sum())
             meter.kernels.add(kernel.__file__)
