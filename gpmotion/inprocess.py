@@ -43,9 +43,8 @@ class InProcessEvaluator:
 
     def rollout(self, genomes, record_senses=False, progress: float = 1.0):
         batch = self.family.encode(genomes)
-        return rollout(self.task.figure, self.scene(progress), batch, n_steps=self.task.n_steps,
-                       q0=self._q0, qd0=self._qd0, contact0=self._contact0, dt=self.task.dt,
-                       record_every=self.task.record_every, actuation=self.actuation,
+        return rollout(self.task.figure, self.scene(progress), batch, **self.task.rollout_options(),
+                       q0=self._q0, qd0=self._qd0, contact0=self._contact0, actuation=self.actuation,
                        default_tau=self.family.default_tau,
                        record_senses=record_senses or self.family.needs_senses,
                        threads=self.threads)

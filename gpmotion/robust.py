@@ -168,7 +168,7 @@ def evaluate(task, family, genomes, *, k: int, seed: int, round_: int, how: str 
     q0, qd0 = task.initial_state()
     q0s, qd0s = perturbed_starts(task.figure, q0, qd0, k, round_rng(seed, round_), sizes)
     traj = robust_rollout(task.figure, task.scene_at(progress), family.encode(list(genomes)), q0s, qd0s,
-                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          **task.rollout_options(),
                           actuation=actuation or family.default_actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
     costs, _, ok = task.score(traj, progress)
@@ -190,7 +190,7 @@ def robustness(task, family, actuation, genome, *, trials: int = 100, seed: int 
     q0s, qd0s = perturbed_starts(task.figure, q0, qd0, trials, trial_rng(seed), sizes)
     q0s[0], qd0s[0] = q0, qd0
     traj = robust_rollout(task.figure, task.scene_at(1.0), family.encode([genome]), q0s, qd0s,
-                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          **task.rollout_options(),
                           actuation=actuation, default_tau=family.default_tau,
                           record_senses=family.needs_senses, threads=threads)
     costs, _, ok = task.score(traj, 1.0)
@@ -302,7 +302,7 @@ def _batch_rollout(ev, genomes, progress, k, rng):
     task, fam = ev.task, ev.family
     q0s, qd0s = perturbed_starts(task.figure, ev._q0, ev._qd0, k, rng, sizes_of(ev.robust))
     return robust_rollout(task.figure, ev.scene(progress), fam.encode(genomes), q0s, qd0s,
-                          n_steps=task.n_steps, dt=task.dt, record_every=task.record_every,
+                          **task.rollout_options(),
                           actuation=ev.actuation, default_tau=fam.default_tau,
                           record_senses=fam.needs_senses, threads=ev.threads)
 

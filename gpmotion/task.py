@@ -248,6 +248,14 @@ class Task:
         """Short human-readable facts about one episode (gait, hits...)."""
         return []
 
+    def fall_stop(self) -> float | None:
+        """Opt in to ending a fallen episode early: the base pitch (rad) beyond
+        which a recorded frame ends it (planar figures), or None to simulate every
+        episode to its end.  An episode that ends holds its fall frame to the end,
+        so a task that opts in scores what happened up to the fall and nothing
+        after; the steps after a fall are then never simulated."""
+        return None
+
     # ---- the harness uses these ------------------------------------------
     @property
     def seconds(self) -> float:
@@ -265,6 +273,11 @@ class Task:
     @property
     def n_steps(self) -> int:
         return int(round(self.seconds / self.dt))
+
+    def rollout_options(self) -> dict:
+        """The task's keywords of :func:`gpmotion.sim.rollout.rollout`."""
+        return {"n_steps": self.n_steps, "dt": self.dt, "record_every": self.record_every,
+                "stop_pitch": self.fall_stop()}
 
     def controlled_actuators(self) -> list[int]:
         """Indices (into the figure's actuators) of the joints the controller drives."""

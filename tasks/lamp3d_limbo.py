@@ -13,8 +13,9 @@ from gpmotion.tasks.lamp_limbo import LampLimbo, Limbo
 class Lamp3DLimbo(Limbo, Lamp3DHop):
     name = "lamp3d_limbo"
     description = "the 3-D lamp hops to a target, passing under a limbo pole"
-    params = {**LampLimbo.params, **LAMP3D_PARAMS}
-    bounds = {**LampLimbo.bounds, "roll0": (0.0, 1.0)}
-    param_docs = {**LampLimbo.param_docs, **LAMP3D_DOCS}
+    # falls_final is the planar lamp's: the 3-D lamp runs every episode to its end
+    params = {**{k: v for k, v in LampLimbo.params.items() if k != "falls_final"}, **LAMP3D_PARAMS}
+    bounds = {**{k: v for k, v in LampLimbo.bounds.items() if k != "falls_final"}, "roll0": (0.0, 1.0)}
+    param_docs = {**{k: v for k, v in LampLimbo.param_docs.items() if k != "falls_final"}, **LAMP3D_DOCS}
     success_threshold = ("base within 5 cm of the target in the floor plane, pole and head "
                          "untouched, base never tilted beyond 1 rad")

@@ -12,6 +12,9 @@ from gpmotion.model import make_scene
 from gpmotion.task import Task, Term, register_task
 
 ARRIVED = 0.05          # m: "at the target"
+FELL = 1.0              # rad: the base pitched beyond this has fallen
+FALLS_FINAL_DOC = ("1: a fall ends the episode: it is scored as it stood at the first recorded "
+                   "frame with the base pitched beyond 1 rad, and the rest is not simulated")
 # Gritz & Hahn's lamp terminals: position relative to the goal, velocity, the
 # force the floor puts on the base (its two contact points), time
 PAPER_TERMINALS = ("px", "pz", "vx", "vz", "force_base_back", "force_base_front", "t")
@@ -32,7 +35,7 @@ def hop_measures(task, traj):
     heads = [fig.contact_names.index(c) for c in ("head_tip", "head_rim")]
     head_force = traj.contact_force[..., heads].max(axis=(1, 2))
     pitch = traj.base()[..., 0]
-    fell = np.abs(pitch).max(axis=1) > 1.0
+    fell = np.abs(pitch).max(axis=1) > FELL
     act = fig.model.act_dof
     neutral = np.abs(traj.q[:, -1, act] - fig.model.neutral).mean(axis=1)
     return {"distance": d[:, -1], "late": late, "moving": moving,
@@ -58,10 +61,10 @@ class LampHop(Task):
     figure = "lamp"
     goal_label = "target"          # pictures: the scene goal, captioned
     description = "the lamp hops to a target point on the floor"
-    params = {"distance": 0.4, "seconds": 3.0}
-    bounds = {"distance": (-5.0, 5.0)}
+    params = {"distance": 0.4, "seconds": 3.0, "falls_final": 0.0}
+    bounds = {"distance": (-5.0, 5.0), "falls_final": (0, 1)}
     param_docs = {"distance": "target x from the start (m; |distance| ≥ 0.05)",
-                  "seconds": "episode length (s)"}
+                  "seconds": "episode length (s)", "falls_final": FALLS_FINAL_DOC}
     terms = HOP_TERMS
     success_threshold = "base within 5 cm of the target at the end, head never touched, not fallen"
     # the style terms phase in over 16 generations; the run stops once they are at full
@@ -78,6 +81,11 @@ class LampHop(Task):
     def validate(self):
         if not 0.05 <= abs(self.params["distance"]) <= 5.0:
             raise ValueError(f"lamp_hop: distance must be within 0.05..5 m, got {self.params['distance']}")
+        check_flag(self, "falls_final")
+
+    def fall_stop(self):
+        """With ``falls_final=1``: a fall (the base pitched beyond 1 rad) ends the episode."""
+        return FELL if self.params["falls_final"] else None
 
     def scene(self):
         return make_scene(goal=(self.params["distance"], 0.0))
@@ -90,6 +98,12 @@ class LampHop(Task):
 
     def describe(self, traj, m):
         return [f"hops: {count_hops(traj)}", f"final distance {m['distance'][0] * 100:.1f} cm"]
+
+
+def check_flag(task, key):
+    """A 0/1 parameter is 0 or 1."""
+    if task.params[key] not in (0.0, 1.0):
+        raise ValueError(f"{task.name}: {key} must be 0 or 1, got {task.params[key]:g}")
 
 
 def count_hops(traj, e=0):

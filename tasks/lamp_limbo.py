@@ -18,7 +18,7 @@ import numpy as np
 from gpmotion.gp.subgoals import Subgoal
 from gpmotion.gp.task_senses import TaskSense, planar_site_formulas
 from gpmotion.task import Ease, Term, register_task
-from gpmotion.tasks.lamp_hop import ARRIVED, HOP_TERMS, LampHop
+from gpmotion.tasks.lamp_hop import ARRIVED, FALLS_FINAL_DOC, HOP_TERMS, LampHop, check_flag
 
 POLE_RADIUS = 0.01
 POLE_SENSES = ("head_pole_dx", "head_z")    # task senses (pole_senses=1)
@@ -79,21 +79,22 @@ class LampLimbo(Limbo, LampHop):
     gp = replace(LampHop.gp, defaults={})
     description = "the lamp hops to a target, passing under a limbo pole"
     params = {"distance": 0.6, "seconds": 4.0, "pole_height": 0.42,   # standing, the lamp is 0.50 m tall
-              "pole_start": 0.60, "pole_senses": 0.0}
+              "pole_start": 0.60, "pole_senses": 0.0, "falls_final": 0.0}
     bounds = {"distance": (0.1, 5.0), "pole_height": (0.1, 1.0), "pole_start": (0.1, 1.0),
-              "pole_senses": (0, 1)}
+              "pole_senses": (0, 1), "falls_final": (0, 1)}
     param_docs = {"distance": "target x (m); the pole stands halfway",
                   "pole_height": "height of the pole's underside (m)", "seconds": "episode length (s)",
                   "pole_start": "the pole's height at the start of a run, lowered to pole_height over "
                                 "the first half (m); = pole_height: no curriculum",
                   "pole_senses": "1: the head tip relative to the pole (head_pole_dx, head_z) "
-                                 "are GP terminals too"}
+                                 "are GP terminals too",
+                  "falls_final": FALLS_FINAL_DOC}
     success_threshold = "base within 5 cm of the target, pole and head untouched, not fallen"
 
     def __init__(self, **overrides):
         super().__init__(**overrides)
-        if self.params["pole_senses"] not in (0.0, 1.0):
-            raise ValueError(f"lamp_limbo: pole_senses must be 0 or 1, got {self.params['pole_senses']}")
+        check_flag(self, "pole_senses")
+        check_flag(self, "falls_final")
         if self.params["pole_senses"]:
             self.gp = replace(self.gp, terminals=tuple(self.figure.sense_names) + POLE_SENSES)
 

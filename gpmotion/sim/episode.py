@@ -38,6 +38,7 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     has_obj = S.obj.shape[0] > 0
     dt, every, actuation, default_tau, limit = st.dt, st.every, st.actuation, st.default_tau, st.limit
     record_senses = st.record_senses
+    stop_dof, stop_off, stop_abs = st.stop_dof, st.stop_off, st.stop_abs
     nc = M.cp_link.shape[0]
     na = M.act_dof.shape[0]
     ns = M.sense_lo.shape[0]
@@ -57,6 +58,8 @@ def run_episode(M, S, goal, st, e, start, prog, out):
     ctrl_init(ci, cf, cstate)
     status[0] = 0
     status[1] = -1
+    status[2] = n_steps
+    ended = False                  # a recorded frame met the stop condition
     for step in range(n_steps + 1):
         t = step * dt
         pen = observe(M, S, goal, q, qd, work, cforce, com, t, senses_all, senses_norm)
@@ -90,17 +93,20 @@ def run_episode(M, S, goal, st, e, start, prog, out):
             max_impact = 0.0
             energy = 0.0
             frame += 1
+            ended = stop_dof >= 0 and abs(q[stop_dof] + stop_off) > stop_abs
         countdown -= 1
-        if step == n_steps:
+        if step == n_steps or ended:
+            status[2] = step
             break
         ok, energy = advance(M, S, q, qd, targets, taus, actuation, dt, limit, work, energy)
         if not ok:
             status[0] = 1
             status[1] = step
+            status[2] = step + 1
             break
     save_contact(owned, contact)
     hold(scratch)
-    # an episode that ended early (diverged, or shorter) holds its last frame
+    # an episode that ended early (diverged, stopped, or shorter) holds its last frame
     for f in range(frame, out_q.shape[0]):
         out_q[f, :] = out_q[frame - 1, :]
         out_qd[f, :] = 0.0

@@ -19,6 +19,9 @@ class Settings(NamedTuple):
     default_tau: float         # τ a controller's taus are pre-filled with
     limit: float               # |q| or |q̇| beyond this ends an episode as diverged
     record_senses: bool
+    stop_dof: int              # a recorded frame with |q[stop_dof] + stop_off| > stop_abs ends
+    stop_off: float            # the episode (a task's "fallen": the base pitch); −1: never
+    stop_abs: float
 
 
 class Start(NamedTuple):
@@ -38,7 +41,7 @@ class Program(NamedTuple):
 
 
 class Outputs(NamedTuple):
-    """Recorded channels (Trajectory's fields) plus the divergence status."""
+    """Recorded channels (Trajectory's fields) plus the status: divergence and steps simulated."""
     q: np.ndarray              # [E, F, nq]
     qd: np.ndarray             # [E, F, nv]
     com: np.ndarray            # [E, F, backend.COM_WIDTH]
@@ -48,7 +51,7 @@ class Outputs(NamedTuple):
     energy: np.ndarray         # [E, F]
     targets: np.ndarray        # [E, F, n_act]
     senses: np.ndarray         # [E, F or 1, n_senses]
-    status: np.ndarray         # int64[E, 2]: diverged (0/1), step of divergence or −1
+    status: np.ndarray         # int64[E, 3]: diverged (0/1), step of divergence or −1, steps simulated
     obj: np.ndarray            # [E, F or 1, grip3d.OB_REC] the scene's object (x, y, z, v, gripped)
 
     @staticmethod
@@ -58,5 +61,5 @@ class Outputs(NamedTuple):
         return Outputs(np.zeros((E, F, nq)), np.zeros((E, F, nv)), np.zeros((E, F, com)),
                        np.zeros((E, F, nc)), np.zeros((E, F)), np.zeros((E, F)), np.zeros((E, F)),
                        np.zeros((E, F, na)), np.zeros((E, F if record_senses else 1, ns)),
-                       np.zeros((E, 2), dtype=np.int64),
+                       np.zeros((E, 3), dtype=np.int64),
                        np.zeros((E, F if record_obj else 1, OB_REC)))

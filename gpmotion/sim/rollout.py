@@ -14,7 +14,7 @@ import numpy as np
 
 from ..compile_events import compile_lock
 from ..controllers import ControllerBatch
-from ..model import KINEMATIC, PD, Figure, Scene, make_scene
+from ..model import KINEMATIC, PD, REVOLUTE, Figure, Scene, make_scene
 from .backend import backend_of
 from .kernel_io import Outputs, Program, Settings, Start
 from .grip3d import O_LINK
@@ -56,6 +56,7 @@ class Trajectory:
     diverged: np.ndarray       # [E] bool
     diverged_step: np.ndarray  # [E] step of divergence or −1
     contact_end: np.ndarray | None = None   # [E, nc, 2|3] friction anchors at the end (contact0 of a continuation)
+    steps_run: np.ndarray | None = None     # [E] steps simulated: fewer when a divergence or a stop ended one
     obj: np.ndarray | None = None   # [E, F, 7] the scene's object: x, y, z, vx, vy, vz, gripped (0/1); None: no object
 
     @property
@@ -189,7 +190,7 @@ def _contact_state(x, n, nc, k):
 def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_steps: int,
             q0=None, qd0=None, contact0=None, dt: float = 1e-3, record_every: int = 10,
             actuation: str = "pd", default_tau: float = 0.05, record_senses: bool = False,
-            threads: int | None = None) -> Trajectory:
+            stop_pitch: float | None = None, threads: int | None = None) -> Trajectory:
     """Simulate every episode of ``controller`` for ``n_steps`` steps of ``dt``.
 
     The full physical state at the end is (``q[:, -1]``, ``qd[:, -1]``,
@@ -201,6 +202,11 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     episode e then ends at frame ⌈n_steps[e] / record_every⌉ (its
     ``contact_end`` is taken there) and its later frames hold that pose with
     zero velocity and no events, as after a divergence.
+
+    ``stop_pitch`` (planar figures with a floating base): an episode ends at
+    the first recorded frame whose base pitch is beyond ±``stop_pitch`` rad,
+    and holds that frame to the end in the same way; ``steps_run`` counts the
+    steps each episode simulated.
     """
     if actuation not in ACTUATION:
         raise ValueError(f"actuation must be one of {sorted(ACTUATION)}, got {actuation!r}")
@@ -229,7 +235,7 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
     nc, na, ns = len(m.cp_link), len(m.act_dof), len(m.sense_lo)
     start = Start(steps, q0, qd0, _contact_state(contact0, E, nc, backend.CONTACT_WIDTH))
     settings = Settings(float(dt), int(record_every), ACTUATION[actuation], float(default_tau),
-                        DIVERGE_LIMIT, bool(record_senses))
+                        DIVERGE_LIMIT, bool(record_senses), *_stop(figure, stop_pitch))
     program = Program(np.array(controller.ci, dtype=np.int64, order="C"),
                       np.array(controller.cf, dtype=np.float64, order="C"),
                       np.zeros((E, max(1, controller.cstate_size))))
@@ -242,7 +248,27 @@ def rollout(figure: Figure, scene: Scene, controller: ControllerBatch, *, n_step
                       times=np.arange(F) * dt * record_every,
                       senses=senses if record_senses else None,
                       diverged=status[:, 0].astype(bool), diverged_step=status[:, 1],
-                      contact_end=start.contact, obj=obj if has_obj else None, **channels)
+                      contact_end=start.contact, obj=obj if has_obj else None,
+                      steps_run=status[:, 2].copy(), **channels)
+
+
+def _stop(figure: Figure, stop_pitch: float | None) -> tuple[int, float, float]:
+    """The kernel's stop condition (dof, offset, bound) for ``stop_pitch``: the base's
+    pitch is its hinge's q plus the fixed angles above it, where only slides are."""
+    if stop_pitch is None:
+        return -1, 0.0, 0.0
+    if not (np.isfinite(stop_pitch) and stop_pitch > 0):
+        raise ValueError(f"stop_pitch must be a positive angle (rad), got {stop_pitch!r}")
+    m = figure.model
+    b = int(m.base_link) if figure.dimensions == 2 else -1
+    chain = []
+    while b >= 0:
+        chain.append(b)
+        b = int(m.parent[b])
+    if not chain or m.jtype[chain[0]] != REVOLUTE or any(m.jtype[l] == REVOLUTE for l in chain[1:]):
+        raise ValueError(f"stop_pitch needs a planar figure whose base is a hinge on slides; "
+                         f"{figure.name!r} has none")
+    return chain[0], float(sum(m.xtree[l, 0] for l in chain)), float(stop_pitch)
 
 
 def run_batch(kernel, args: tuple, n: int, threads: int | None = None) -> None:
