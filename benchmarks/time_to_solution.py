@@ -7,8 +7,9 @@
 Per task and seed, one run on the old defaults (generations 40 run in full:
 ``OLD``) and one on today's, in this process, printing for each:
 
-* ``steps``: simulated steps (episodes × steps each; a diverged episode
-  counts the steps it ran), the work a run did, and ``evals``;
+* ``steps``: simulated steps (episodes × steps each; an episode a
+  divergence or a fall ended counts the steps it ran), the work a run did,
+  and ``evals``;
 * ``to_bar``: steps until the final-weights best first reached the bar
   (a run that stops there would have done this much work);
 * ``cost`` and ``solved``: best.json's final cost (every term at full
@@ -39,7 +40,8 @@ episodes could stop early (each a count of simulated steps):
   lamp tasks only.
 
 ``--option KEY=VALUE`` sets a family option of the new runs (e.g.
-``fast_trig=true``), as ``--search`` sets a search setting.
+``fast_trig=true``), as ``--search`` sets a search setting, and ``--param
+KEY=VALUE`` a task parameter (e.g. ``falls_final=1``).
 
 Seconds depend on the machine and its load; steps and the ratios do not.
 """
@@ -87,12 +89,17 @@ class KernelMeter:
 
     def __init__(self):
         self.seconds, self.steps, self.kernels = 0.0, 0, set()
+        self.trace = []            # (episodes, steps) so far, after each batch
         self._run_batch = rollout_module.run_batch
         self._compiles = _Compiles()
 
     @property
     def compiled(self) -> int:
         return self._compiles.count
+
+    def steps_at(self, episodes: int) -> int:
+        """Steps simulated by the batch that took the count of episodes to ``episodes``."""
+        return next(s for e, s in self.trace if e >= episodes)
 
     def __enter__(self):
         event.register("numba:compile", self._compiles)
@@ -103,9 +110,10 @@ class KernelMeter:
             t0 = time.perf_counter()
             run_batch(kernel, args, n, threads)
             meter.seconds += time.perf_counter() - t0
-            start, out = args[4], args[6]      # args: (M, S, goal, st, start, prog, out)
-            div = out.status[:, 0] == 1
-            meter.steps += int(np.where(div, out.status[:, 1] + 1, start.n_steps).sum())
+            out = args[6]                      # args: (M, S, goal, st, start, prog, out)
+            meter.steps += int(out.status[:n, 2].sum())      # each episode's steps simulated
+            episodes = (meter.trace[-1][0] if meter.trace else 0) + n
+            meter.trace.append((episodes, meter.steps))
             meter.kernels.add(kernel.__file__)
 
         rollout_module.run_batch = timed
@@ -222,42 +230,44 @@ def _timed_finish(spent: list):
 
 
 def one_run(task: str, seed: int, search: dict, threads: int | None, artifacts: bool,
-            family: str | None = None, episodes: bool = False, options: dict | None = None) -> dict:
+            family: str | None = None, episodes: bool = False, options: dict | None = None,
+            params: dict | None = None) -> dict:
     spent: list[float] = []
     orig_finish = run_module._finish
     run_module._finish = _timed_finish(spent)
+    extra = (family, options, params)
     try:
         if not episodes:
-            return _one_run(task, seed, search, threads, artifacts, spent, family, options)
+            return _one_run(task, seed, search, threads, artifacts, spent, *extra)
         with EpisodeMeter() as em:
-            r = _one_run(task, seed, search, threads, artifacts, spent, family, options)
+            r = _one_run(task, seed, search, threads, artifacts, spent, *extra)
         return {**r, **{k: getattr(em, k) for k in EPISODE_COLUMNS}}
     finally:
         run_module._finish = orig_finish
 
 
-def _one_run(task, seed, search, threads, artifacts, spent, family=None, options=None) -> dict:
+def _one_run(task, seed, search, threads, artifacts, spent, family=None, options=None,
+             params=None) -> dict:
     with tempfile.TemporaryDirectory() as d, KernelMeter() as meter:
         out = Path(d) / "run"
         t0 = time.perf_counter()
         fam = {} if family is None else {"family": family}
         if options:
             fam["family_options"] = dict(options)
-        run(RunConfig(task=task, seed=seed, search=search, threads=threads, **fam), out, quiet=True,
-            artifacts=artifacts)
+        run(RunConfig(task=task, seed=seed, search=search, threads=threads, params=dict(params or {}),
+                      **fam), out, quiet=True, artifacts=artifacts)
         wall = time.perf_counter() - t0
         best = read_json(out / "best.json", kind="best")
         rows = (out / "log.csv").read_text().splitlines()
     head = rows[0].split(",")
     log = [dict(zip(head, r.split(","))) for r in rows[1:]]
     evals = int(log[-1]["evaluations"])
-    per_eval = meter.steps / max(1, evals + 1)            # + the replay of the best
     bar = BARS.get(task)
     first = next((int(r["evaluations"]) for r in log
                   if r["best_final"] and bar is not None and float(r["best_final"]) <= bar), None)
     ok = best["success"] and (bar is None or best["final_cost"] <= bar)
     return {"task": task, "seed": seed, "generations": len(log), "evals": evals,
-            "steps": meter.steps, "to_bar": None if first is None else round(first * per_eval),
+            "steps": meter.steps, "to_bar": None if first is None else meter.steps_at(first),
             "cost": round(best["final_cost"], 4), "solved": best["success"], "ok": bool(ok),
             "wall_s": round(wall, 1), "outside": round(1 - meter.seconds / wall, 3),
             "kernels": len(meter.kernels), "compiled": meter.compiled, "jit": jit_signatures(),
@@ -281,6 +291,8 @@ def main(argv=None):
                     help="a search setting of the new runs (JSON value)")
     ap.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                     help="a family option of the new runs (JSON value), e.g. fast_trig=true")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                    help="task parameter of the new runs (e.g. falls_final=1)")
     ap.add_argument("--artifacts", action="store_true", help="draw the pictures, as `gpmotion run`")
     ap.add_argument("--family", default=None, help="controller family (default: gp)")
     ap.add_argument("--episodes", action="store_true",
@@ -289,6 +301,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     new = {k: _value(v) for k, v in (s.split("=", 1) for s in a.search)}
     options = {k: _value(v) for k, v in (s.split("=", 1) for s in a.option)}
+    params = {k: _value(v) for k, v in (s.split("=", 1) for s in a.param)}
     kinds = [k for k in ("old", "new") if a.only in (None, k)]
     rows = []
     print(f"{'task':<22}{'seed':>5} {'':<4}{'gens':>5}{'evals':>7}{'steps':>12}{'to_bar':>12}"
@@ -299,7 +312,7 @@ def main(argv=None):
                 old = {**OLD, **({"generations": OLD_GENERATIONS[task]}
                                  if task in OLD_GENERATIONS else {})}
                 r = one_run(task, seed, old if kind == "old" else new, a.threads, a.artifacts,
-                            a.family, a.episodes, options if kind == "new" else None)
+                            a.family, a.episodes, *((options, params) if kind == "new" else ()))
                 r["defaults"] = kind
                 rows.append(r)
                 print(f"{task:<22}{seed:>5} {kind:<4}{r['generations']:>5}{r['evals']:>7}"

@@ -20,6 +20,19 @@ def test_a_runs_steps_time_in_the_kernel_and_kernels_are_counted():
     assert rows[0]["steps"] == rows[1]["steps"] and rows[0]["cost"] == rows[1]["cost"]
 
 
+def test_a_run_whose_falls_are_final_counts_the_steps_it_simulated():
+    """With ``falls_final=1`` a fallen episode ends at its fall: the count is what ran."""
+    r = time_to_solution.one_run("lamp_hop", 0, {"generations": 2, "population": 10}, 2,
+                                 artifacts=False, params={"falls_final": 1})
+    assert 0 < r["steps"] < r["evals"] * 3000 * 0.9
+
+
+def test_steps_to_the_bar_are_read_at_the_batch_that_reached_it():
+    meter = time_to_solution.KernelMeter()
+    meter.trace = [(30, 32_390), (60, 67_760), (90, 91_300)]
+    assert [meter.steps_at(n) for n in (1, 30, 31, 90)] == [32_390, 32_390, 67_760, 91_300]
+
+
 def test_counting_signatures_survives_a_dead_weak_proxy():
     """A process that ran other code holds weak proxies to dead objects; the
     count must step over them (isinstance on one raises ReferenceError)."""
