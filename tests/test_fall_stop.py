@@ -104,3 +104,16 @@ def simulate_stopped(figure, stop_pitch=1.0):
     fig = load_figure(figure)
     return rollout(fig, make_scene(**fig.ground), schedule.constant(fig.model.neutral),
                    n_steps=20, stop_pitch=stop_pitch)
+
+
+def test_the_contract_check_refuses_a_3d_task_that_declares_falls_final():
+    from gpmotion.check import check_task
+    from gpmotion.task import task_class
+
+    class Tilted(task_class("lamp3d_hop")):
+        name = "tilted_lamp3d"
+
+        def fall_stop(self):
+            return 1.0
+    with pytest.raises(ValueError, match="planar figure whose base is a hinge"):
+        check_task(Tilted())
