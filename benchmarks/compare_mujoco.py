@@ -657,7 +657,7 @@ def format_summary(r: dict) -> str:
                   f"  ratio   {h['ratio_one_thread']:8.2f}× one thread (bar {h['bar_one_thread']:g}×: "
                   f"{'met' if h['meets_bar'] else 'NOT met'}; goal 1×: "
                   f"{'met' if h['meets_goal'] else 'not met'}), {h['ratio_all_threads']:.2f}× all threads"]
-    for name, h in r.get("creatures", {}).items():     # issue 17's bar: ≥ 1.5× one thread
+    for name, h in r.get("creatures", {}).items():     # the creatures' bar: ≥ 1.5× one thread
         w = h["workload"]
         lines.append(f"creature {name} ({w['links']} links, {w['dofs']} dof, {w['contacts']} contacts): "
                      f"ours {h['ours_steps_per_s'] / 1e6:.3f}, MuJoCo {h['mujoco_steps_per_s'] / 1e6:.3f} "
@@ -710,7 +710,7 @@ def main(argv=None):
                                        seconds=a.gp_seconds)
     if a.only in (None, "humanoid"):
         result["humanoid"] = compare_humanoid(episodes, a.humanoid_seconds or seconds, repeats, threads)
-    if a.only in (None, "creatures"):        # issue 17: Cujo, Rex, Bob (free roots, on the ground)
+    if a.only in (None, "creatures"):        # Cujo, Rex, Bob (free roots, on the ground)
         result["creatures"] = {n: compare_humanoid(episodes, a.humanoid_seconds or seconds, repeats,
                                                    threads, figure=n) for n in ("cujo", "rex", "bob")}
     result["pendulum_crosscheck"] = pendulum_crosscheck()

@@ -2,7 +2,7 @@
 nominal evaluations of the same batch, through the run's evaluator
 (``InProcessEvaluator`` with ``robust``, as ``gpmotion run --robust-starts K``).
 
-The bar (issue 16): K starts cost close to K single episodes, not more —
+The bar: K starts cost close to K single episodes, not more —
 ratio = robust time / (K × one nominal evaluation) ≈ 1 or below.  Best of
 ``--repeat`` timings of each (the machine is shared).
 

@@ -3,7 +3,7 @@
     python benchmarks/rollout_ab.py BASE_DIR NEW_DIR [--rounds 3] [--only lamp_gp]
 
 runs ``gpmotion bench --json --no-gp --no-warm-start`` for the three
-workloads of issue 15 — lamp (sines), lamp driven by GP trees
+workloads of ``gpmotion bench`` — lamp (sines), lamp driven by GP trees
 (``--controller gp``) and herman (3-D, GP arm) — with ``PYTHONPATH`` set to
 each checkout in turn (base, new, base, new, ...), so both see the same
 machine load; a first untimed pass per checkout compiles the kernels.

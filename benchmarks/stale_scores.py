@@ -1,4 +1,4 @@
-"""Stale scores in the serial search (issue 12, defect 1), measured.
+"""Stale scores in the serial search, measured.
 
 Runs one serial search exactly as ``gpmotion compare`` does (lamp_hop,
 bsr-time, ~3,000 evaluations, seed 0), then re-scores the final working set

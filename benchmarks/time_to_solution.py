@@ -64,7 +64,7 @@ from gpmotion.run import RunConfig, run
 import gpmotion.sim.rollout as rollout_module
 
 run_module = importlib.import_module("gpmotion.run")   # the module (gpmotion.run is also a function)
-BARS = {"lamp_hop": 0.08}          # final cost a polished motion stays within (issue 50)
+BARS = {"lamp_hop": 0.08}          # final cost a polished motion stays within
 # the defaults before the stop criteria: every generation run, phases over all of them
 OLD = {"patience": 0, "phase_span": 0}
 OLD_GENERATIONS = {"lamp_hop": 40, "lamp_limbo": 40}

@@ -68,7 +68,7 @@ VIEW = {"elev": 10, "azim": -80, "ground": False,
 
 
 class HermanTask(Task):
-    """What every Herman task shares (issue 15: one block, not one copy per
+    """What every Herman task shares (one block, not one copy per
     task): the figure, the joints under GP and their senses, the GP budget,
     the time step, the picture view, and success = the task's own ``reached``
     test AND a motion that has come to rest (``at_rest``).  A task overrides

@@ -1,8 +1,8 @@
 """Golden runs: small fixed-seed runs whose records must not change.
 
-Recorded before the architecture step (issue 15) so a refactor that changes a
-single bit of a result is caught.  Regenerate only for a deliberate change of
-results, and say in the commit which fix changed them and why:
+They catch a refactor that changes a single bit of a result.  Regenerate only
+for a deliberate change of results, and say in the commit which fix changed
+them and why:
 
     python -m tests.golden_runs          # rewrites tests/golden/*.json
 """

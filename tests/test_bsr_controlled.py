@@ -1,4 +1,4 @@
-"""BSR drives exactly a task's controlled actuators, as GP does (issue 12, defect 2)."""
+"""BSR drives exactly a task's controlled actuators, as GP does."""
 import numpy as np
 import pytest
 

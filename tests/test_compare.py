@@ -1,5 +1,4 @@
-"""Phase-aware scores on a real task, and compare's figure agreeing with its table
-(issue 12, defects 1 and 3)."""
+"""Phase-aware scores on a real task, and compare's figure agreeing with its table."""
 import csv
 import json
 

@@ -1,4 +1,4 @@
-"""Refining a phase's controller inside its composite (issue 16, the paper's
+"""Refining a phase's controller inside its composite (the paper's
 future work): the climb never gets worse, is deterministic and resumable;
 variants of one phase run exactly as their own composites; the refined
 controller is a file of its own that replays to the reported score."""

@@ -1,4 +1,4 @@
-"""Issue 17: the 3-D creatures (Cujo, Rex, Bob), fixed and 2-DOF joints, 3-D BSR."""
+"""The 3-D creatures (Cujo, Rex, Bob), fixed and 2-DOF joints, 3-D BSR."""
 import copy
 from pathlib import Path
 

@@ -1,4 +1,4 @@
-"""Task senses (issue 18): terminals a task derives from its figure's senses
+"""Task senses: terminals a task derives from its figure's senses
 by a formula, parsed (never evaluated as Python), computed by the GP
 controller before its trees (no simulator-kernel change), equal to the
 plain-Python twin, and on the lamp equal to the head tip's position."""

@@ -63,7 +63,7 @@ def test_serial_search_killed_resumes_to_the_uninterrupted_result(tmp_path):
 
 
 def test_kill_between_log_rows_and_first_checkpoint_leaves_no_duplicate(tmp_path, monkeypatch):
-    """The window issue 13 measured (3/3 kills): rows on disk, no checkpoint yet."""
+    """A kill after the log rows are on disk and before the first checkpoint."""
     args = ["run", "lamp_hop", *GP, "--generations", "3"]
     ref, killed = tmp_path / "ref", tmp_path / "killed"
     assert main([*args, "--out", str(ref)]) == 0
@@ -120,7 +120,7 @@ def test_two_simultaneous_starts_one_wins(tmp_path):
     assert gens == [0, 1, 2]
 
 
-# ------------------------------------------------------------------ issue 14
+# ------------------------------------------------- finished runs, extended
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):

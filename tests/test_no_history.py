@@ -1,6 +1,7 @@
 """The product speaks of itself: no tracked text file outside CHANGELOG.md tells
-how the project was developed (a development session by number, "tried in"
-a session, a commit hash given as history, a file or folder named by session),
+how the project was developed (a development session or a tracker's issue by
+number, "tried in" a session, a commit hash given as history, a file or folder
+named by session),
 and research data lives with its study, not in a notes folder."""
 import re
 import subprocess
@@ -17,7 +18,8 @@ PHRASES = re.compile(
     rf"\b{S}s?\s+\d+"                                                # the development session by number
     rf"|\b(?:this|next|earlier|last|previous|later|that|one) {S}\b"  # ... or by its place
     rf"|\btried in (?:a |an |the )?(?:{S}|round)\b"
-    r"|\bwhat we learned\b",
+    r"|\bwhat we learned\b"
+    r"|\b(?:issue|defect)s?\s+#?\d+",                            # the tracker's work items
     re.IGNORECASE)
 # a file or folder named by session: herman_s17_bar.jsonl, auslander_s26/, rex_s23/
 SESSION_NAME = re.compile(r"(?:^|[_/-])s\d{1,2}(?:[_/.-]|$)")
@@ -61,6 +63,7 @@ def test_the_phrases_are_found():
     assert history_phrases(f"Tried in {S.capitalize()} 23.")
     assert history_phrases(f"left for the next {S}")
     assert history_phrases("## What we " + "learned")
+    assert history_phrases("The bar (iss" + "ue 16): K starts") and history_phrases("defect" + " 2")
     # the product's own words are not history: compose's session module, a process group
     assert not history_phrases("from ..compose import optimize, " + S)
     assert not history_phrases(f"start_new_{S}=True; after round 1 the log has two rows")

@@ -1,5 +1,5 @@
 """Run directories: one writer, no symlink followed, records bound to one run,
-hand-edited inputs refused with one line (issue 13)."""
+hand-edited inputs refused with one line."""
 import errno
 import json
 import os
@@ -84,7 +84,7 @@ def test_planted_lock_symlink_is_not_followed(tmp_path, outside):
 
 
 def test_write_probe_truncates_nothing(tmp_path, outside):
-    """Issue 13: a planted `.write-test.PID` link let the probe empty a file outside."""
+    """A planted `.write-test.PID` link let the probe empty a file outside."""
     d = tmp_path / "r"
     d.mkdir()
     os.symlink(outside, d / f".write-test.{os.getpid()}")

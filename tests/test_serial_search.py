@@ -156,7 +156,7 @@ def test_sense_genomes_with_relevance_trajectories():
     assert s.history[-1][1] < s.history[0][1]
 
 
-# -- phases: scores under phased-in terms go stale (issue 12, defect 1) ------
+# -- phases: scores under phased-in terms go stale -------------------------
 
 STYLE = np.array([1.0, 0.0, 0.0])
 

@@ -1,5 +1,4 @@
-"""Task senses: terminals a task derives from its figure's senses (issue 18;
-Gritz & Hahn's "distance to the nearest obstacle", "the pole relative to the
+"""Task senses: terminals a task derives from its figure's senses (Gritz & Hahn's "distance to the nearest obstacle", "the pole relative to the
 head").
 
 A task declares each as a name and an arithmetic formula over the figure's
