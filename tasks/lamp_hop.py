@@ -3,6 +3,11 @@
 Main goal: distance from the base centre to the target at the end.  Style
 points, phased in once the lamp has learned to arrive: arrive early, stay
 put after arriving, never hit the head or fall over, end at the neutral pose.
+
+``--param falls_final=1`` ends a fallen episode at its fall (Task.fall_stop):
+a search then simulates a quarter to a third of the steps, but scores a fall
+where it happened, which hides the head hit that follows; off by default
+(docs/speed.md).
 """
 import numpy as np
 

@@ -1,5 +1,5 @@
-"""Task senses: terminals a task derives from its figure's senses (Gritz & Hahn's "distance to the nearest obstacle", "the pole relative to the
-head").
+"""Task senses: terminals a task derives from its figure's senses (Gritz &
+Hahn's "distance to the nearest obstacle", "the pole relative to the head").
 
 A task declares each as a name and an arithmetic formula over the figure's
 sense names, written in its own file::

@@ -19,9 +19,9 @@ class Settings(NamedTuple):
     default_tau: float         # τ a controller's taus are pre-filled with
     limit: float               # |q| or |q̇| beyond this ends an episode as diverged
     record_senses: bool
-    stop_dof: int              # a recorded frame with |q[stop_dof] + stop_off| > stop_abs ends
-    stop_off: float            # the episode (a task's "fallen": the base pitch); −1: never
-    stop_abs: float
+    stop_dof: int              # −1 (never), or: a recorded frame with |q[stop_dof] + stop_off|
+    stop_off: float            # > stop_abs ends the episode (a task's fall: the base pitch
+    stop_abs: float            # beyond a bound, gpmotion.task.Task.fall_stop)
 
 
 class Start(NamedTuple):
