@@ -5,7 +5,7 @@ points, phased in once the lamp has learned to arrive: arrive early, stay
 put after arriving, never hit the head or fall over, end at the neutral pose.
 
 ``--param falls_final=1`` ends a fallen episode at its fall (Task.fall_stop):
-a search then simulates a quarter to a third of the steps, but scores a fall
+a search then simulates a fifth to two fifths of the steps, but scores a fall
 where it happened, which hides the head hit that follows; off by default
 (docs/speed.md).
 """
