@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ..model import REVOLUTE, SLIDE_X, SLIDE_Z
-from . import geometry
+from . import geometry_fast
 from .planar import (aba, centre_of_mass, ground_contacts, integrate, joint_torques, kinematics,
                      pole_contacts)
 from .senses import compute_senses
@@ -112,8 +112,9 @@ def goal(scene) -> np.ndarray:
 
 
 def link_poses(model, q):
-    """[..., nl, 3] world (θ, x, z) of every link."""
-    return geometry.link_poses(model, q)
+    """[..., nl, 3] world (θ, x, z) of every link (compiled; ``geometry.link_poses``
+    is the numpy form)."""
+    return geometry_fast.link_poses(model, q)
 
 
 def base_pose(model, q, poses):
@@ -128,7 +129,7 @@ def base_pose(model, q, poses):
 
 def points(model, q, poses, links, local):
     """World (x, z) [..., n, 2] of link-frame points ``local`` on ``links`` (−1: fixed root)."""
-    return geometry.points_world(model, poses(), links, local)
+    return geometry_fast.points_world(model, poses(), links, local)
 
 
 
