@@ -1,7 +1,9 @@
 """Forward kinematics in numpy over recorded frames (poses, sites, segments).
 
-The kernel records joint coordinates only; pictures and scores rebuild
-world geometry here, vectorized over episodes and frames.
+The kernel records joint coordinates only; pictures rebuild world geometry
+here, vectorized over episodes and frames.  Scores read the compiled forms
+of ``link_poses`` and ``points_world`` (:mod:`gpmotion.sim.geometry_fast`),
+which give these values bit for bit.
 """
 from __future__ import annotations
 
