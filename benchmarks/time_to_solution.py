@@ -60,6 +60,7 @@ import numpy as np
 from numba.core import event
 
 from gpmotion.records import read_json
+from gpmotion.tasks.lamp_hop import ARRIVED, FELL
 from gpmotion.run import RunConfig, run
 import gpmotion.sim.rollout as rollout_module
 
@@ -161,8 +162,8 @@ class EpisodeMeter:
 
     @staticmethod
     def _ran(traj):
-        full = (len(traj.times) - 1) * traj.record_every
-        return np.where(traj.diverged, traj.diverged_step + 1, full), full
+        """Steps each episode simulated (a divergence or a fall may have ended it), and a full one's."""
+        return traj.steps_run, (len(traj.times) - 1) * traj.record_every
 
     def _count(self, task, traj):
         ran, full = self._ran(traj)
@@ -170,7 +171,7 @@ class EpisodeMeter:
         self.div_saved += int((full - ran[traj.diverged]).sum())
         if traj.is3d:
             return
-        fallen = np.abs(traj.base()[..., 0]) > 1.0          # [E, F]
+        fallen = np.abs(traj.base()[..., 0]) > FELL         # [E, F]
         first = np.where(fallen.any(axis=1), fallen.argmax(axis=1), len(traj.times) - 1)
         self.fell_after += int(np.maximum(ran - first * traj.record_every, 0).sum())
 
@@ -192,7 +193,6 @@ class EpisodeMeter:
 
 def lamp_bound(task, traj, progress):
     """A lower bound of each lamp episode's cost from frames 0..f, for every f [E, F]."""
-    from gpmotion.tasks.lamp_hop import ARRIVED
     w = {t.name: t.weight * t.factor(progress) for t in task.terms}
     fig = traj.figure
     d = np.linalg.norm(traj.site("base_centre") - np.array([task.params["distance"], 0.0]), axis=-1)
@@ -201,7 +201,7 @@ def lamp_bound(task, traj, progress):
     heads = [fig.contact_names.index(c) for c in ("head_tip", "head_rim")]
     force = np.maximum.accumulate(traj.contact_force[..., heads].max(axis=2), axis=1)
     head = (force > 0) + force / (fig.total_mass * 9.81)
-    fell = np.maximum.accumulate(np.abs(traj.base()[..., 0]), axis=1) > 1.0
+    fell = np.maximum.accumulate(np.abs(traj.base()[..., 0]), axis=1) > FELL
     b = w["late"] * late + w["head_hit"] * head + w["fell"] * fell
     if "pole" in w:
         pen = np.maximum.accumulate(traj.pole_hit, axis=1)

@@ -27,6 +27,15 @@ def test_a_run_whose_falls_are_final_counts_the_steps_it_simulated():
     assert 0 < r["steps"] < r["evals"] * 3000 * 0.9
 
 
+def test_where_the_steps_went_counts_none_after_a_fall_that_ended_its_episode():
+    """``--episodes``: full episodes run on after a fall; episodes that a fall ends do not."""
+    search = {"generations": 2, "population": 10}
+    full = time_to_solution.one_run("lamp_hop", 0, search, 2, artifacts=False, episodes=True)
+    final = time_to_solution.one_run("lamp_hop", 0, search, 2, artifacts=False, episodes=True,
+                                     params={"falls_final": 1})
+    assert full["fell_after"] > 0 and final["fell_after"] == 0
+
+
 def test_steps_to_the_bar_are_read_at_the_batch_that_reached_it():
     meter = time_to_solution.KernelMeter()
     meter.trace = [(30, 32_390), (60, 67_760), (90, 91_300)]
